@@ -281,8 +281,8 @@ def _flag(source: Path, name: str, value: Any) -> bool:
 def _origin(source: Path, name: str, value: Any) -> np.ndarray:
     if value is None:
         return np.zeros(2)
-    values = list(np.ravel(value)) if isinstance(value, (list, tuple, np.ndarray)) else None
-    if values is None or len(values) not in (2, 3) or len(values) != len(value):
+    values = np.asarray(value).tolist() if isinstance(value, np.ndarray) else value
+    if not isinstance(values, (list, tuple)) or len(values) not in (2, 3):
         raise _fail(source, name, f"must be a list [x, y, yaw] of numbers (got {value!r})")
     numbers = [_number(source, name, v) for v in values]
     if len(numbers) == 3 and numbers[2] != 0.0:
