@@ -1,0 +1,100 @@
+"""Dreyfus-Wagner Steiner trees against brute force on small random graphs."""
+
+from __future__ import annotations
+
+import itertools
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from tether.recurrent.steiner import steiner_tree
+
+
+def brute_force_steiner(graph: nx.Graph, terminals: list, weight: str = "weight") -> float:
+    """Cheapest connected vertex set holding the terminals, priced by its MST."""
+    others = [v for v in graph if v not in set(terminals)]
+    best = np.inf
+    for r in range(len(others) + 1):
+        for extra in itertools.combinations(others, r):
+            sub = graph.subgraph([*terminals, *extra])
+            if not nx.is_connected(sub):
+                continue
+            mst = nx.minimum_spanning_tree(sub, weight=weight)
+            best = min(best, mst.size(weight=weight))
+    return best
+
+
+def random_weighted_graph(rng: np.random.Generator, n: int, p: float, integer: bool) -> nx.Graph:
+    g = nx.gnp_random_graph(n, p, seed=int(rng.integers(1 << 30)))
+    for u, v in g.edges:
+        g.edges[u, v]["weight"] = (
+            int(rng.integers(0, 6)) if integer else float(rng.uniform(0.0, 3.0))
+        )
+    return g
+
+
+def assert_valid_tree(graph: nx.Graph, tree: nx.Graph, terminals: list, cost: float) -> None:
+    assert set(terminals) <= set(tree.nodes)
+    assert nx.is_tree(tree)
+    for u, v in tree.edges:
+        assert graph.has_edge(u, v)
+    assert tree.size(weight="weight") == pytest.approx(cost, abs=1e-9)
+    for v in tree:
+        if v not in terminals:
+            assert tree.degree(v) >= 2
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_matches_brute_force(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(5, 11))
+    g = random_weighted_graph(rng, n, float(rng.uniform(0.25, 0.7)), integer=seed % 2 == 0)
+    comp = max(nx.connected_components(g), key=len)
+    if len(comp) < 2:
+        pytest.skip("degenerate random graph")
+    k = int(rng.integers(2, min(len(comp), 6) + 1))
+    terminals = [int(t) for t in rng.choice(sorted(comp), size=k, replace=False)]
+    cost, tree = steiner_tree(g, terminals)
+    assert cost == pytest.approx(brute_force_steiner(g, terminals), abs=1e-9)
+    assert_valid_tree(g, tree, terminals, cost)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_unit_weights_and_string_labels(seed: int) -> None:
+    rng = np.random.default_rng(100 + seed)
+    g0 = nx.connected_watts_strogatz_graph(11, 4, 0.3, seed=seed)
+    g = nx.relabel_nodes(g0, {v: f"v{v}" for v in g0})  # no weight attribute: cost 1
+    terminals = [f"v{t}" for t in rng.choice(11, size=4, replace=False)]
+    cost, tree = steiner_tree(g, terminals)
+    assert cost == brute_force_steiner(g, terminals)
+    # With unit weights the cost is the number of edges = vertices - 1.
+    assert tree.number_of_nodes() == cost + 1
+
+
+def test_terminal_order_does_not_matter() -> None:
+    rng = np.random.default_rng(7)
+    g = random_weighted_graph(rng, 10, 0.5, integer=False)
+    comp = sorted(max(nx.connected_components(g), key=len))
+    terms = comp[:5]
+    costs = {steiner_tree(g, list(perm)).cost for perm in itertools.permutations(terms)}
+    assert max(costs) - min(costs) < 1e-9
+
+
+def test_trivial_and_invalid_inputs() -> None:
+    g = nx.path_graph(4)
+    assert steiner_tree(g, []).cost == 0.0
+    cost, tree = steiner_tree(g, [2, 2])
+    assert cost == 0.0 and list(tree.nodes) == [2]
+    assert steiner_tree(g, [0, 3]).cost == 3.0
+    with pytest.raises(ValueError):
+        steiner_tree(g, [0, 9])
+    with pytest.raises(ValueError):
+        steiner_tree(nx.DiGraph(g), [0, 1])
+    g.add_node(9)
+    with pytest.raises(nx.NetworkXNoPath):
+        steiner_tree(g, [0, 9])
+    h = nx.path_graph(3)
+    h.edges[0, 1]["weight"] = -1.0
+    with pytest.raises(ValueError):
+        steiner_tree(h, [0, 2])
