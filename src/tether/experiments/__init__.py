@@ -1,0 +1,1 @@
+"""Experiments: parameter grids x seeds, executors, reports."""

@@ -1,0 +1,1 @@
+"""Paths: reference trajectories, grid search and splines."""

@@ -1,0 +1,163 @@
+"""The ``tether`` command line: a thin layer over :mod:`tether.runner`.
+
+Every command is one call of the Python API; errors in the user's input are
+printed as one line (file, field, fix) with exit code 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from tether.errors import TetherError
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=False,
+    help="tether: multi-robot teams that stay connected. Run `tether run` for a demo.",
+)
+out = Console()
+err = Console(stderr=True)
+
+DEFAULT_SCENARIO = "silent_demo"
+
+ScenarioArg = Annotated[
+    str, typer.Argument(help="Scenario YAML file, or the name of a built-in scenario.")
+]
+SetOpt = Annotated[
+    list[str] | None,
+    typer.Option("--set", "-s", help="Override a scenario key, e.g. strategy.params.d0_m=5"),
+]
+
+
+def _load(scenario: str, overrides: list[str] | None):
+    from tether.config import apply_overrides, read_scenario_data, scenario_from_dict
+
+    data, label, base = read_scenario_data(scenario)
+    if overrides:
+        data = apply_overrides(data, overrides, label)
+    return scenario_from_dict(data, label, base)
+
+
+@app.command()
+def run(
+    scenario: ScenarioArg = DEFAULT_SCENARIO,
+    out_dir: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Run folder (default: runs/<name>-...)")
+    ] = None,
+    seed: Annotated[int | None, typer.Option(help="Override the scenario's seed.")] = None,
+    set_: SetOpt = None,
+    no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
+) -> None:
+    """Run one scenario and write its run folder (scenario, Parquet records, summary, figures).
+
+    Example: tether run scenarios/silent_paper.yaml --set strategy.params.d0_m=5
+    """
+    from tether.runner import run as run_scenario
+
+    sc = _load(scenario, set_)
+    out.print(f"running [bold]{sc.name}[/] ({sc.strategy.name}, {sc.team.n_robots} robots) ...")
+    outcome = run_scenario(sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None)
+    s = outcome.summary
+    keys = [
+        "steps",
+        "sim_time_s",
+        "wall_time_s",
+        "connected_all_steps",
+        "min_lambda2",
+        "min_links",
+        "collisions",
+    ]
+    for k in keys:
+        if k in s:
+            v = s[k]
+            out.print(f"  {k:<22} {v:.4g}" if isinstance(v, float) else f"  {k:<22} {v}")
+    out.print(f"results: [bold]{outcome.path}[/]")
+
+
+@app.command()
+def sweep(
+    scenario: ScenarioArg,
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Sweep folder.")] = Path(
+        "runs/sweep"
+    ),
+    seeds: Annotated[int, typer.Option(help="Seeds per parameter combination.")] = 1,
+    set_: SetOpt = None,
+) -> None:
+    """Run the scenario's `sweep:` grid x seeds (resumable) and write a comparison table.
+
+    Example: tether sweep scenarios/silent_paper.yaml --out runs/fig5
+    """
+    from tether.experiments.sweep import run_sweep
+
+    sc = _load(scenario, set_)
+    result = run_sweep(sc, out_dir, seeds=seeds, progress=lambda m: out.print(m))
+    out.print(f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}")
+    for fig in result.figures:
+        out.print(f"figure: {fig}")
+
+
+@app.command()
+def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
+    """Check a scenario (schema, strategy parameters, map, initial connectivity) without running."""
+    from tether.runner import build
+
+    sc = _load(scenario, set_)
+    cls = __import__("tether.runner", fromlist=["strategy_class"]).strategy_class(sc)
+    if hasattr(cls, "run_scenario"):
+        __import__("tether.runner", fromlist=["strategy_params"]).strategy_params(sc, cls)
+    else:
+        build(sc)
+    out.print(f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)")
+
+
+@app.command("list")
+def list_() -> None:
+    """List built-in scenarios, strategies and scenes."""
+    import tether.world.scenes  # noqa: F401
+    from tether.config import builtin_scenarios
+    from tether.registry import SCENES
+    from tether.strategies import load_builtin_strategies
+
+    out.print("scenarios:  " + ", ".join(builtin_scenarios()))
+    out.print("strategies: " + ", ".join(load_builtin_strategies()))
+    out.print("scenes:     " + ", ".join(SCENES.names()))
+
+
+def main() -> None:
+    """Entry point: run the app, turning user errors into one line on stderr."""
+    try:
+        app(standalone_mode=False)
+    except TetherError as exc:
+        err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
+        sys.exit(2)
+    except (typer.Exit, SystemExit) as exc:
+        code = getattr(exc, "exit_code", getattr(exc, "code", 0))
+        sys.exit(code or 0)
+    except typer.Abort:
+        sys.exit(130)
+    except Exception as exc:  # click usage errors and anything unexpected
+        import click
+
+        if isinstance(exc, click.ClickException):
+            exc.show()
+            sys.exit(exc.exit_code)
+        if os.environ.get("TETHER_DEBUG"):
+            raise
+        err.print(
+            f"error: internal error {type(exc).__name__}: {exc} "
+            "(set TETHER_DEBUG=1 for the traceback and please report it)",
+            highlight=False,
+            markup=False,
+            soft_wrap=True,
+        )
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,60 @@
+"""Reference trajectories for a leader: polylines at constant speed, or any function of time."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Polyline:
+    """A piecewise-linear path through ``waypoints`` (``(k, dim)``), parametrised by arc length."""
+
+    waypoints: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.waypoints = np.atleast_2d(np.asarray(self.waypoints, dtype=float))
+        seg = np.diff(self.waypoints, axis=0)
+        self._seg_len = np.linalg.norm(seg, axis=1)
+        self._cum = np.concatenate([[0.0], np.cumsum(self._seg_len)])
+
+    @property
+    def length_m(self) -> float:
+        return float(self._cum[-1])
+
+    @property
+    def end(self) -> np.ndarray:
+        return self.waypoints[-1]
+
+    def at(self, s_m: float) -> np.ndarray:
+        """Point at arc length ``s_m`` (clamped to the path)."""
+        s = float(np.clip(s_m, 0.0, self.length_m))
+        if len(self.waypoints) == 1 or self.length_m == 0.0:
+            return self.waypoints[0].copy()
+        k = int(np.clip(np.searchsorted(self._cum, s, side="right") - 1, 0, len(self._seg_len) - 1))
+        frac = (s - self._cum[k]) / max(self._seg_len[k], 1e-12)
+        return self.waypoints[k] + frac * (self.waypoints[k + 1] - self.waypoints[k])
+
+    def project(self, point: np.ndarray, s_min: float = 0.0, window_m: float = np.inf) -> float:
+        """Arc length of the closest path point to ``point`` within ``[s_min, s_min + window_m]``."""
+        best_s, best_d = s_min, np.inf
+        for k, (a, b) in enumerate(zip(self.waypoints[:-1], self.waypoints[1:], strict=True)):
+            s0, s1 = self._cum[k], self._cum[k + 1]
+            if s1 < s_min or s0 > s_min + window_m:
+                continue
+            ab = b - a
+            denom = float(ab @ ab)
+            t = 0.0 if denom == 0 else float(np.clip((point - a) @ ab / denom, 0.0, 1.0))
+            s = float(np.clip(s0 + t * (s1 - s0), s_min, s_min + window_m))
+            d = float(np.linalg.norm(self.at(s) - point))
+            if d < best_d:
+                best_s, best_d = s, d
+        return best_s
+
+    def segments(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.waypoints[:-1], self.waypoints[1:]
+
+
+TimeFunction = Callable[[float], np.ndarray]

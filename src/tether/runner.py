@@ -1,0 +1,225 @@
+"""Build a scenario's world, team and strategy; run it; write its run folder.
+
+This is the Python API behind ``tether run``::
+
+    from tether.runner import run
+    outcome = run("silent_demo")            # a built-in name or a YAML path
+    print(outcome.path, outcome.summary["connected_all_steps"])
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydantic import ValidationError
+
+from tether.config import Scenario, format_validation_error, load_scenario
+from tether.errors import MapError, ScenarioError, TetherError
+from tether.graph import is_connected
+from tether.record import RunFolder, TrajectoryRecorder, provenance
+from tether.registry import SCENES, STRATEGIES
+from tether.sensing import SensorModel, sensed_pairs
+from tether.sim import RunResult, Strategy, TeamState, simulate
+from tether.strategies import load_builtin_strategies
+from tether.team import initial_positions
+from tether.world.world import World
+
+
+@dataclass
+class Built:
+    """A scenario turned into objects, ready to simulate."""
+
+    scenario: Scenario
+    world: World
+    sensor: SensorModel
+    initial: TeamState
+    strategy: Strategy
+    rng: np.random.Generator
+
+
+@dataclass
+class RunOutcome:
+    path: Path
+    summary: dict[str, Any]
+
+
+def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
+    """The scenario's world from the scene registry (``free``, ``map``, ``town``, ...)."""
+    import tether.world.scenes  # noqa: F401  (registers the scenes)
+
+    src, cfg = scenario.source, scenario.world
+    if cfg.scene not in SCENES:
+        raise ScenarioError(
+            f"{src}: world.scene: unknown scene {cfg.scene!r}; expected one of: "
+            f"{', '.join(SCENES.names())}"
+        )
+    params = dict(cfg.params)
+    if cfg.scene == "free":
+        params.setdefault("dim", cfg.dim)
+    for key in ("path", "file"):
+        if key in params:
+            params[key] = str(scenario.resolve_path(params[key]))
+    try:
+        world = SCENES.get(cfg.scene)(rng, **params)
+    except MapError as exc:
+        raise ScenarioError(f"{src}: world.params: {exc}") from None
+    except TypeError as exc:
+        raise ScenarioError(f"{src}: world.params: {exc}") from None
+    if world.dim != cfg.dim:
+        raise ScenarioError(
+            f"{src}: world.dim: scene {cfg.scene!r} is {world.dim}-D; set dim: {world.dim}"
+        )
+    return world
+
+
+def make_sensor(scenario: Scenario) -> SensorModel:
+    s = scenario.sensing
+    return SensorModel(
+        range_m=s.range_m,
+        body_radius_m=s.body_radius_m,
+        occlusion=s.occlusion,
+        radial_error_m=s.radial_error_m,
+        angular_error_rad=s.angular_error_rad,
+        noise=s.noise,
+    )
+
+
+def strategy_class(scenario: Scenario) -> type:
+    load_builtin_strategies()
+    name = scenario.strategy.name
+    if name not in STRATEGIES:
+        raise ScenarioError(
+            f"{scenario.source}: strategy.name: unknown strategy {name!r}; expected one of: "
+            f"{', '.join(STRATEGIES.names())}"
+        )
+    return STRATEGIES.get(name)
+
+
+def strategy_params(scenario: Scenario, cls: type) -> Any:
+    try:
+        return cls.Params.model_validate(scenario.strategy.params)
+    except ValidationError as exc:
+        raise ScenarioError(
+            format_validation_error(scenario.source, exc, prefix="strategy.params")
+        ) from None
+
+
+def build(scenario: Scenario, seed: int | None = None) -> Built:
+    """Turn a validated scenario into world, sensor, team and strategy (no simulation)."""
+    rng = np.random.default_rng(scenario.seed if seed is None else seed)
+    cls = strategy_class(scenario)
+    params = strategy_params(scenario, cls)
+    world = build_world(scenario, rng)
+    sensor = make_sensor(scenario)
+    try:
+        positions = initial_positions(scenario.team.init, scenario.team.n_robots, world, rng)
+    except ValueError as exc:
+        raise ScenarioError(f"{scenario.source}: team.init: {exc}") from None
+    bad = ~world.points_free(positions)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise ScenarioError(
+            f"{scenario.source}: team.init: robot {k} at {positions[k].tolist()} is inside an "
+            "obstacle or outside the world; move the team into free space"
+        )
+    pairs = sensed_pairs(positions, sensor, world)
+    if not is_connected(len(positions), pairs):
+        raise ScenarioError(
+            f"{scenario.source}: team.init: the initial team is not connected with "
+            f"sensing.range_m={sensor.range_m}; place robots closer (spacing_m) or raise the range"
+        )
+    initial = TeamState.at_rest(positions)
+    strategy = cls.from_scenario(params, scenario, world, initial, rng)
+    return Built(scenario, world, sensor, initial, strategy, rng)
+
+
+def default_run_dir(scenario: Scenario, seed: int, root: str | Path | None = None) -> Path:
+    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
+    return Path(root or scenario.output.dir) / f"{scenario.name}-s{seed}-{stamp}"
+
+
+def summarize(
+    scenario: Scenario, seed: int, result: RunResult, wall_time_s: float
+) -> dict[str, Any]:
+    """The ``summary.json`` of a navigation run (keys documented in the README)."""
+    recs = result.records
+    lam = np.array([r.lambda2 for r in recs], dtype=float)
+    return {
+        "scenario": scenario.name,
+        "strategy": scenario.strategy.name,
+        "seed": seed,
+        "n_robots": scenario.team.n_robots,
+        "dim": scenario.world.dim,
+        "sim_time_s": result.sim_time_s,
+        "steps": result.steps,
+        "wall_time_s": wall_time_s,
+        "connected_all_steps": result.connected_all_steps,
+        "min_lambda2": float(np.nanmin(lam)) if np.isfinite(lam).any() else None,
+        "min_links": int(min(r.n_links for r in recs)),
+        "max_links": int(max(r.n_links for r in recs)),
+        "collisions": int(sum(r.collisions for r in recs)),
+        "collision_distance_m": scenario.sim.collision_distance_m,
+        "min_distance_m": float(min(r.min_distance_m for r in recs)),
+        **{f"strategy_{k}" if k in _RESERVED else k: v for k, v in result.strategy_metrics.items()},
+        "provenance": provenance(),
+    }
+
+
+_RESERVED = {"scenario", "strategy", "seed", "n_robots", "steps", "sim_time_s", "wall_time_s"}
+
+
+def run(
+    scenario: Scenario | str | Path,
+    *,
+    out_dir: str | Path | None = None,
+    seed: int | None = None,
+    figures: bool | None = None,
+) -> RunOutcome:
+    """Run one scenario and write its run folder; returns the folder and the summary."""
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    seed = scenario.seed if seed is None else seed
+    cls = strategy_class(scenario)
+    path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
+    if hasattr(cls, "run_scenario"):  # strategies with their own loop (exploration)
+        folder = RunFolder(path)
+        folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
+        summary = cls.run_scenario(scenario, path, np.random.default_rng(seed))
+        return RunOutcome(path, summary)
+    built = build(scenario, seed)
+    folder = RunFolder(path)
+    folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
+    recorder = TrajectoryRecorder(every=scenario.output.record_every)
+    start = time.perf_counter()
+    result = simulate(
+        built.world,
+        built.sensor,
+        built.strategy,
+        built.initial,
+        dt_s=scenario.sim.dt_s,
+        max_steps=scenario.sim.max_steps,
+        rng=built.rng,
+        collision_distance_m=scenario.sim.collision_distance_m,
+        recorder=recorder,
+    )
+    wall = time.perf_counter() - start
+    folder.write_table("steps.parquet", recorder.step_columns())
+    folder.write_table("robots.parquet", recorder.robot_columns())
+    folder.write_table("links.parquet", recorder.link_columns())
+    folder.write_rows("events.parquet", recorder.events)
+    summary = summarize(scenario, seed, result, wall)
+    folder.write_json("summary.json", summary)
+    if scenario.output.figures if figures is None else figures:
+        from tether.viz.plots import run_figures
+
+        for name, fig in run_figures(built, recorder).items():
+            folder.save_figure(fig, name)
+    return RunOutcome(path, summary)
+
+
+__all__ = ["Built", "RunOutcome", "TetherError", "build", "build_world", "run"]

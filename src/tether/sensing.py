@@ -1,0 +1,178 @@
+"""Who senses whom, and what they measure.
+
+A robot ``i`` senses robot ``k`` when (a) ``||X_k - X_i|| <= range_m``,
+(b) the straight line of sight between them is clear of obstacles, and (c) no
+third robot's body (a disc/sphere of ``body_radius_m``) hides one from the
+other. Sensing is mutual, so the sensed pairs form an undirected graph: the
+*interaction graph* whose connectivity every strategy must keep.
+
+Occlusion follows the non-communicating paper (Kerestecioglu & Cezayirli,
+Fig. 3): robot ``j`` hides ``k`` from ``i`` when its body meets the segment
+``i-k`` and ``j`` lies between them, i.e. closer to both ends than they are to
+each other. With that definition an occluded pair is always joined through
+the occluder by strictly shorter links, so occlusion never changes whether the
+team is connected, only how many links it has (the paper's remark after
+Theorem 1).
+
+Measurements are relative positions in the observer's frame with bounded
+errors (the paper's Fig. 1): radial error ``|e_r| <= radial_error_m`` and
+angular error ``|e_theta| <= angular_error_rad``. ``noise="uniform"`` draws
+both uniformly within their bounds; ``noise="bound"`` puts both exactly at a
+bound with random sign (the worst case for the constraints).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from tether.geometry import point_segment_distance, random_perpendicular, unit
+from tether.graph import pairs_within
+from tether.world.world import World
+
+NoiseKind = Literal["none", "uniform", "bound"]
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """Range, line of sight, occlusion by robot bodies and bounded noise."""
+
+    range_m: float
+    body_radius_m: float = 0.0
+    occlusion: bool = True
+    radial_error_m: float = 0.0
+    angular_error_rad: float = 0.0
+    noise: NoiseKind = "uniform"
+
+    def __post_init__(self) -> None:
+        if not self.range_m > 0:
+            raise ValueError("range_m must be > 0")
+        if self.body_radius_m < 0 or self.radial_error_m < 0 or self.angular_error_rad < 0:
+            raise ValueError("body radius and error bounds must be >= 0")
+        if self.radial_error_m >= self.range_m:
+            raise ValueError("radial_error_m must be smaller than range_m")
+
+
+@dataclass
+class Observation:
+    """What the team senses at one instant.
+
+    ``pairs`` is the true interaction graph (for metrics and recording only).
+    The directed measurements are stored CSR-style: robot ``i``'s measured
+    relative positions are ``measured[indptr[i]:indptr[i+1]]``. ``target``
+    says whom each measurement is of; it exists for recording and tests, and
+    unlabelled strategies must not use it.
+    """
+
+    pairs: np.ndarray
+    indptr: np.ndarray
+    target: np.ndarray
+    measured: np.ndarray
+    true_relative: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.indptr) - 1
+
+    def of(self, i: int) -> np.ndarray:
+        """Measured relative positions ``(k, dim)`` of the robots ``i`` senses."""
+        return self.measured[self.indptr[i] : self.indptr[i + 1]]
+
+    def degree(self) -> np.ndarray:
+        return np.diff(self.indptr)
+
+    def observer(self) -> np.ndarray:
+        """Observer index of every measurement (length ``2 * len(pairs)``)."""
+        return np.repeat(np.arange(self.n), self.degree())
+
+
+def _occluded(positions: np.ndarray, pairs: np.ndarray, body_radius_m: float) -> np.ndarray:
+    """Boolean per pair: a third robot's body hides the pair from each other.
+
+    Candidate occluders of ``(i, k)`` are closer to both than ``d_ik <= range``,
+    hence in range of ``i``: we scan only ``i``'s range-neighbours, so the cost
+    is ``O(sum of degree^2)``, not all-pairs.
+    """
+    n = len(positions)
+    m = len(pairs)
+    if m == 0 or body_radius_m <= 0:
+        return np.zeros(m, dtype=bool)
+    both = np.concatenate([pairs, pairs[:, ::-1]])
+    order = np.argsort(both[:, 0], kind="stable")
+    nbr = both[order, 1]
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(both[:, 0], minlength=n))])
+    i, k = pairs[:, 0], pairs[:, 1]
+    counts = indptr[i + 1] - indptr[i]
+    pair_idx = np.repeat(np.arange(m), counts)
+    starts = np.repeat(indptr[i], counts)
+    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    j = nbr[starts + offsets]
+    pi, pk = i[pair_idx], k[pair_idx]
+    keep = j != pk
+    pair_idx, j, pi, pk = pair_idx[keep], j[keep], pi[keep], pk[keep]
+    xi, xk, xj = positions[pi], positions[pk], positions[j]
+    d_ik = np.linalg.norm(xk - xi, axis=1)
+    between = (np.linalg.norm(xj - xi, axis=1) < d_ik) & (np.linalg.norm(xj - xk, axis=1) < d_ik)
+    blocks = between & (point_segment_distance(xj, xi, xk) < body_radius_m)
+    out = np.zeros(m, dtype=bool)
+    out[pair_idx[blocks]] = True
+    return out
+
+
+def sensed_pairs(
+    positions: np.ndarray, sensor: SensorModel, world: World | None = None
+) -> np.ndarray:
+    """Undirected pairs ``(i, k)`` that sense each other (the true interaction graph)."""
+    positions = np.asarray(positions, dtype=float)
+    pairs = pairs_within(positions, sensor.range_m)
+    if len(pairs) == 0:
+        return pairs
+    keep = np.ones(len(pairs), dtype=bool)
+    if world is not None and world.has_obstacles:
+        keep &= world.segments_clear(positions[pairs[:, 0]], positions[pairs[:, 1]])
+    if sensor.occlusion and sensor.body_radius_m > 0:
+        keep &= ~_occluded(positions, pairs, sensor.body_radius_m)
+    return pairs[keep]
+
+
+def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
+    if sensor.noise == "none" or len(rel) == 0:
+        return rel.copy()
+    k = len(rel)
+    if sensor.noise == "uniform":
+        e_r = rng.uniform(-sensor.radial_error_m, sensor.radial_error_m, size=k)
+        e_a = rng.uniform(-sensor.angular_error_rad, sensor.angular_error_rad, size=k)
+    else:
+        e_r = sensor.radial_error_m * rng.choice([-1.0, 1.0], size=k)
+        e_a = sensor.angular_error_rad * rng.choice([-1.0, 1.0], size=k)
+    dist = np.linalg.norm(rel, axis=1)
+    direction = unit(rel)
+    perp = random_perpendicular(rel, rng)
+    rotated = np.cos(e_a)[:, None] * direction + np.sin(e_a)[:, None] * perp
+    return rotated * np.maximum(dist + e_r, 0.0)[:, None]
+
+
+def sense(
+    positions: np.ndarray,
+    sensor: SensorModel,
+    rng: np.random.Generator,
+    world: World | None = None,
+) -> Observation:
+    """Sense the team: the interaction graph and every robot's noisy measurements."""
+    positions = np.asarray(positions, dtype=float)
+    n = len(positions)
+    pairs = sensed_pairs(positions, sensor, world)
+    directed = np.concatenate([pairs, pairs[:, ::-1]]) if len(pairs) else pairs.reshape(0, 2)
+    order = np.lexsort((directed[:, 1], directed[:, 0]))
+    directed = directed[order]
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(directed[:, 0], minlength=n))])
+    rel = positions[directed[:, 1]] - positions[directed[:, 0]]
+    return Observation(
+        pairs=pairs,
+        indptr=indptr.astype(np.intp),
+        target=directed[:, 1].astype(np.intp),
+        measured=_noisy(rel, sensor, rng),
+        true_relative=rel,
+    )

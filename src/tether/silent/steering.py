@@ -1,0 +1,178 @@
+"""Local Steering Strategy for non-communicating robots.
+
+Source: F. Kerestecioglu and A. Cezayirli, "Connected Navigation of
+Non-Communicating Mobile Agents" (sections III-IV). Each robot moves using only
+the noisy relative positions ``x_k^i`` of the robots it senses (no labels, no
+messages):
+
+* a desired direction from the gradient step (14) of a cost: the desired
+  distance cost (13), giving eq. (15), or the farthest-neighbour cost (12);
+* the step magnitude then shrunk to satisfy constraint (1) for the robots in
+  ``S_ip`` (the step does not approach them) and constraint (2) for those in
+  ``S_iq`` (it does), with ``d_m = d_max - delta_r``.
+
+With bounded measurement errors (radial ``delta_r``, angular ``delta_theta``)
+we evaluate both constraints for the worst true position consistent with each
+measurement, which is what the paper's Theorem 1 needs to hold with noise:
+
+* a neighbour is in ``S_iq`` only if the step approaches it for every true
+  position in its uncertainty cone: ``phi_k + delta_theta < 90 deg``, where
+  ``phi_k`` is the angle between the step and the measurement;
+* (2) for all such positions: ``||x|| <= (||m_k|| - delta_r) cos(phi_k + delta_theta)``;
+* (1): ``||x|| <= (d_m - max_p ||m_p||) / 2`` (the paper's form; ``d_m``
+  already absorbs the radial error).
+
+With ``delta_r = delta_theta = 0`` these are exactly the paper's (1) and (2).
+Both constraints bound only the step's length for a given direction, and
+shrinking a step never violates them, so a step can also be shortened for a
+speed limit, obstacles, or the optional minimum separation.
+
+All functions work on a whole team at once: measurements are given CSR-style
+(``observer`` index per measurement, see :class:`tether.sensing.Observation`).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+from tether.geometry import unit
+
+Cost = Literal["desired_distance", "farthest"]
+
+
+def _segment_sum(values: np.ndarray, observer: np.ndarray, n: int) -> np.ndarray:
+    out = np.zeros((n, values.shape[1]))
+    np.add.at(out, observer, values)
+    return out
+
+
+def _segment_min(values: np.ndarray, observer: np.ndarray, n: int) -> np.ndarray:
+    out = np.full(n, np.inf)
+    np.minimum.at(out, observer, values)
+    return out
+
+
+def desired_steps(
+    measured: np.ndarray,
+    observer: np.ndarray,
+    n: int,
+    *,
+    cost: Cost = "desired_distance",
+    gamma: float = 0.2,
+    d0_m: float = 8.0,
+) -> np.ndarray:
+    """Gradient step (14) of each robot's cost, from its measurements only.
+
+    ``desired_distance`` (13): ``x = 2 gamma sum_k (||x_k|| - d0) x_k / ||x_k||`` (15).
+    ``farthest`` (12): ``J = max_k ||x - x_k||``, whose gradient at ``x = 0`` gives
+    ``x = gamma x_f / ||x_f||`` towards the farthest sensed robot ``f``.
+    Robots that sense nobody get a zero step.
+    """
+    dist = np.linalg.norm(measured, axis=1)
+    direction = unit(measured)
+    if cost == "desired_distance":
+        terms = 2.0 * gamma * (dist - d0_m)[:, None] * direction  # eq. (15)
+        return _segment_sum(terms, observer, n)
+    if cost == "farthest":
+        far = np.full(n, -1.0)
+        np.maximum.at(far, observer, dist)
+        is_far = dist >= far[observer]
+        # first farthest measurement of each observer (ties: lowest index)
+        first = np.full(n, -1)
+        idx = np.nonzero(is_far)[0]
+        first[observer[idx[::-1]]] = idx[::-1]
+        out = np.zeros((n, measured.shape[1]))
+        has = first >= 0
+        out[has] = gamma * direction[first[has]]  # eq. (14) on cost (12)
+        return out
+    raise ValueError(f"unknown cost {cost!r}; expected 'desired_distance' or 'farthest'")
+
+
+def step_bounds(
+    directions: np.ndarray,
+    measured: np.ndarray,
+    observer: np.ndarray,
+    n: int,
+    *,
+    d_max_m: float,
+    radial_error_m: float = 0.0,
+    angular_error_rad: float = 0.0,
+    min_separation_m: float = 0.0,
+) -> np.ndarray:
+    """Largest step length each robot may take along its unit ``directions`` (``(n, dim)``).
+
+    Implements constraints (1) and (2) robustly (module docstring). With
+    ``min_separation_m > 0``, a robot whose step may approach a neighbour also
+    keeps ``||x|| <= (||m_k|| - delta_r - s) / 2``, so two robots that sense
+    each other never come closer than ``s``. Robots that sense nobody get ``inf``.
+    """
+    d_m = d_max_m - radial_error_m  # definition of d_m (section III)
+    u = directions[observer]
+    dist = np.linalg.norm(measured, axis=1)
+    cos_phi = np.einsum("kd,kd->k", u, unit(measured))
+    phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
+    worst = phi + angular_error_rad
+    in_q = worst < np.pi / 2  # S_iq: the step approaches k for every consistent position
+    bound = np.where(
+        in_q,
+        (dist - radial_error_m) * np.cos(np.minimum(worst, np.pi / 2)),  # constraint (2)
+        0.5 * (d_m - dist),  # constraint (1)
+    )
+    if min_separation_m > 0:
+        may_approach = phi - angular_error_rad < np.pi / 2
+        sep = 0.5 * (dist - radial_error_m - min_separation_m)
+        bound = np.where(may_approach, np.minimum(bound, sep), bound)
+    return np.maximum(_segment_min(np.maximum(bound, 0.0), observer, n), 0.0)
+
+
+def constrained_steps(
+    desired: np.ndarray,
+    measured: np.ndarray,
+    observer: np.ndarray,
+    *,
+    d_max_m: float,
+    radial_error_m: float = 0.0,
+    angular_error_rad: float = 0.0,
+    min_separation_m: float = 0.0,
+    max_step_m: float = np.inf,
+) -> np.ndarray:
+    """Desired steps shrunk (direction kept) to satisfy (1), (2) and the speed limit."""
+    n = len(desired)
+    length = np.linalg.norm(desired, axis=1)
+    directions = unit(desired)
+    bound = step_bounds(
+        directions,
+        measured,
+        observer,
+        n,
+        d_max_m=d_max_m,
+        radial_error_m=radial_error_m,
+        angular_error_rad=angular_error_rad,
+        min_separation_m=min_separation_m,
+    )
+    allowed = np.minimum(np.minimum(length, bound), max_step_m)
+    return directions * allowed[:, None]
+
+
+def satisfies_constraints(
+    step: np.ndarray,
+    rel_true: np.ndarray,
+    *,
+    d_max_m: float,
+    tol: float = 1e-9,
+) -> bool:
+    """Check one robot's step against (1) or (2) for each neighbour's *true* position.
+
+    The per-pair form used in the proof of Theorem 1: every neighbour ``k``
+    satisfies either ``2||x|| + ||x_k|| <= d_max`` or ``||x||^2 <= x^T x_k``.
+    Used by tests as an independent oracle.
+    """
+    if len(rel_true) == 0:
+        return True
+    x2 = float(step @ step)
+    dist = np.linalg.norm(rel_true, axis=1)
+    ok_p = 2.0 * np.sqrt(x2) + dist <= d_max_m + tol
+    ok_q = x2 <= rel_true @ step + tol
+    return bool(np.all(ok_p | ok_q))

@@ -1,0 +1,270 @@
+"""The ``silent`` strategy: leader-follower navigation without communication.
+
+Followers run the Local Steering Strategy (:mod:`tether.silent.steering`);
+the leader (``R_N``, hidden: nobody treats it differently) follows a given
+trajectory, subject to the same constraints (1) and (2) so that it cannot
+break the group. Source: Kerestecioglu & Cezayirli, sections III-B and IV.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from tether.config import Scenario
+from tether.errors import ScenarioError
+from tether.paths.trajectory import Polyline, TimeFunction
+from tether.registry import STRATEGIES
+from tether.silent.steering import constrained_steps, desired_steps
+from tether.sim import StepContext, StrategyBase, TeamState
+from tether.world.world import World
+
+
+class TrajectoryParams(BaseModel):
+    """Leader trajectory: ``waypoints`` at ``speed_mps``, or a Python function of time."""
+
+    model_config = ConfigDict(extra="forbid")
+    kind: Literal["waypoints", "function"] = "waypoints"
+    waypoints: list[list[float]] | None = None
+    speed_mps: float = Field(default=1.0, gt=0)
+    function: str | None = Field(
+        default=None, description="'package.module:callable' mapping t_s -> position"
+    )
+    goal_tolerance_m: float = Field(default=0.5, gt=0)
+
+    @model_validator(mode="after")
+    def _complete(self) -> TrajectoryParams:
+        if self.kind == "waypoints" and (not self.waypoints or len(self.waypoints) < 2):
+            raise ValueError("kind 'waypoints' needs a 'waypoints' list of at least 2 points")
+        if self.kind == "function" and not self.function:
+            raise ValueError("kind 'function' needs 'function: package.module:callable'")
+        return self
+
+
+class SilentParams(BaseModel):
+    """Parameters of the non-communicating strategy (paper section V defaults)."""
+
+    model_config = ConfigDict(extra="forbid")
+    cost: Literal["desired_distance", "farthest"] = "desired_distance"
+    d0_m: float = Field(default=11.0, gt=0, description="desired distance d0 of cost (13)")
+    gamma: float = Field(default=0.2, gt=0, description="gain of the gradient step (14)")
+    leader: int = Field(default=-1, description="index of the leader R_N (default: last robot)")
+    trajectory: TrajectoryParams
+    max_speed_mps: float | None = Field(default=None, gt=0)
+    min_separation_m: float = Field(default=0.0, ge=0)
+    robust: bool = Field(
+        default=True,
+        description="evaluate (1)-(2) for the worst true position within the sensor's error "
+        "bounds (false: trust measurements as the paper's noise-free theorem does)",
+    )
+
+
+def _load_function(spec: str) -> TimeFunction:
+    module_name, _, attr = spec.partition(":")
+    module = importlib.import_module(module_name)
+    fn = getattr(module, attr)
+    if not callable(fn):
+        raise TypeError(f"{spec} is not callable")
+    return fn
+
+
+@STRATEGIES.register("silent")
+class SilentStrategy(StrategyBase):
+    """Leader-follower Local Steering Strategy (no communication, unlabelled robots)."""
+
+    name = "silent"
+    Params = SilentParams
+
+    def __init__(
+        self,
+        *,
+        d_max_m: float,
+        trajectory: Polyline | TimeFunction,
+        leader: int = -1,
+        cost: str = "desired_distance",
+        d0_m: float = 11.0,
+        gamma: float = 0.2,
+        radial_error_m: float = 0.0,
+        angular_error_rad: float = 0.0,
+        speed_mps: float = 1.0,
+        max_speed_mps: float | None = None,
+        min_separation_m: float = 0.0,
+        goal_tolerance_m: float = 0.5,
+    ) -> None:
+        super().__init__()
+        self.d_max_m = d_max_m
+        self.trajectory = trajectory
+        self.leader_arg = leader
+        self.cost = cost
+        self.d0_m = d0_m
+        self.gamma = gamma
+        self.radial_error_m = radial_error_m
+        self.angular_error_rad = angular_error_rad
+        self.speed_mps = speed_mps
+        self.max_speed_mps = max_speed_mps
+        self.min_separation_m = min_separation_m
+        self.goal_tolerance_m = goal_tolerance_m
+
+    # -- construction from a scenario -------------------------------------------------
+    @classmethod
+    def from_scenario(
+        cls,
+        params: SilentParams,
+        scenario: Scenario,
+        world: World,
+        initial: TeamState,
+        rng: np.random.Generator,
+    ) -> SilentStrategy:
+        src = scenario.source
+        field = "strategy.params.trajectory"
+        traj = params.trajectory
+        if traj.kind == "waypoints":
+            pts = np.asarray(traj.waypoints, dtype=float)
+            if pts.shape[1] != world.dim:
+                raise ScenarioError(
+                    f"{src}: {field}.waypoints: expected points of {world.dim} coordinates "
+                    f"(got {pts.shape[1]})"
+                )
+            path: Polyline | TimeFunction = Polyline(pts)
+            check_path_clear(path, world, src, field)
+        else:
+            try:
+                path = _load_function(traj.function or "")
+            except (ImportError, AttributeError, TypeError, ValueError) as exc:
+                raise ScenarioError(
+                    f"{src}: {field}.function: cannot load {traj.function!r} ({exc}); "
+                    "expected 'package.module:callable'"
+                ) from None
+        n = initial.n
+        if not -n <= params.leader < n:
+            raise ScenarioError(
+                f"{src}: strategy.params.leader: must be a robot index in [-{n}, {n - 1}] "
+                f"(got {params.leader})"
+            )
+        sensing = scenario.sensing
+        robust = params.robust
+        return cls(
+            d_max_m=sensing.range_m,
+            trajectory=path,
+            leader=params.leader,
+            cost=params.cost,
+            d0_m=params.d0_m,
+            gamma=params.gamma,
+            radial_error_m=sensing.radial_error_m,
+            angular_error_rad=sensing.angular_error_rad if robust else 0.0,
+            speed_mps=traj.speed_mps,
+            max_speed_mps=params.max_speed_mps,
+            min_separation_m=params.min_separation_m,
+            goal_tolerance_m=traj.goal_tolerance_m,
+        )
+
+    # -- the Strategy protocol ---------------------------------------------------------
+    def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
+        super().reset(world, state, rng)
+        self.world = world
+        self.leader = self.leader_arg % state.n
+        self.progress_m = 0.0
+        self._done = False
+        self._leader_travel_m = 0.0
+        self._blocked_steps = 0
+        self._stuck = 0
+
+    def leader_target(self, position: np.ndarray, t_next_s: float, dt_s: float) -> np.ndarray:
+        """Where the leader wants to be at ``t + dt`` (a carrot ahead on the path)."""
+        if isinstance(self.trajectory, Polyline):
+            s = self.trajectory.project(position, self.progress_m, window_m=2 * self.d_max_m)
+            self.progress_m = max(self.progress_m, s)
+            return self.trajectory.at(self.progress_m + self.speed_mps * dt_s)
+        return np.asarray(self.trajectory(t_next_s), dtype=float)
+
+    def step(self, ctx: StepContext) -> TeamState:
+        self._step = ctx.step
+        obs, state = ctx.obs, ctx.state
+        n = state.n
+        observer = obs.observer()
+        desired = desired_steps(
+            obs.measured, observer, n, cost=self.cost, gamma=self.gamma, d0_m=self.d0_m
+        )
+        leader = self.leader
+        target = self.leader_target(state.positions[leader], ctx.t_s + ctx.dt_s, ctx.dt_s)
+        desired[leader] = target - state.positions[leader]
+        max_step = np.inf if self.max_speed_mps is None else self.max_speed_mps * ctx.dt_s
+        steps = constrained_steps(
+            desired,
+            obs.measured,
+            observer,
+            d_max_m=self.d_max_m,
+            radial_error_m=self.radial_error_m,
+            angular_error_rad=self.angular_error_rad,
+            min_separation_m=self.min_separation_m,
+            max_step_m=max_step,
+        )
+        steps = self._avoid_obstacles(state.positions, steps)
+        wanted = float(np.linalg.norm(desired[leader]))
+        moved = float(np.linalg.norm(steps[leader]))
+        if wanted > 1e-9 and moved < 0.05 * wanted:
+            self._blocked_steps += 1
+        self._leader_travel_m += moved
+        new_positions = state.positions + steps
+        velocities = steps / ctx.dt_s
+        self._update_done(new_positions[leader], ctx)
+        return TeamState(new_positions, velocities)
+
+    def _avoid_obstacles(self, positions: np.ndarray, steps: np.ndarray) -> np.ndarray:
+        """Halve steps (direction kept) until their segments stay in free space."""
+        if not self.world.has_obstacles and self.world.bounds_m is None:
+            return steps
+        steps = steps.copy()
+        active = np.linalg.norm(steps, axis=1) > 0
+        for _ in range(12):
+            idx = np.nonzero(active)[0]
+            if len(idx) == 0:
+                break
+            ok = self.world.segments_clear(positions[idx], positions[idx] + steps[idx])
+            ok &= self.world.points_free(positions[idx] + steps[idx])
+            active[idx[ok]] = False
+            steps[idx[~ok]] *= 0.5
+        steps[active] = 0.0
+        return steps
+
+    def _update_done(self, leader_pos: np.ndarray, ctx: StepContext) -> None:
+        if isinstance(self.trajectory, Polyline):
+            at_end = np.linalg.norm(leader_pos - self.trajectory.end) <= self.goal_tolerance_m
+            self._done = bool(at_end)
+
+    def done(self) -> bool:
+        return self._done
+
+    def metrics(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "leader_reached_goal": self._done,
+            "leader_travel_m": self._leader_travel_m,
+            "leader_blocked_steps": self._blocked_steps,
+        }
+        if isinstance(self.trajectory, Polyline):
+            out["path_length_m"] = self.trajectory.length_m
+            out["path_progress"] = self.progress_m / max(self.trajectory.length_m, 1e-12)
+        return out
+
+
+def check_path_clear(path: Polyline, world: World, source: str, field: str) -> None:
+    """Raise a one-line ScenarioError if a waypoint path leaves free space."""
+    pts = path.waypoints
+    free = world.points_free(pts)
+    if not free.all():
+        k = int(np.argmin(free))
+        raise ScenarioError(
+            f"{source}: {field}.waypoints[{k}]: point {pts[k].tolist()} is inside an obstacle "
+            "or outside the world; move it into free space"
+        )
+    a, b = path.segments()
+    clear = world.segments_clear(a, b)
+    if not clear.all():
+        k = int(np.argmin(clear))
+        raise ScenarioError(
+            f"{source}: {field}.waypoints: segment {k}->{k + 1} passes through an obstacle; "
+            "add a waypoint around it"
+        )
