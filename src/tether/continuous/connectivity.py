@@ -1,0 +1,525 @@
+"""Generalized connectivity: weights, potential and the analytic gradient of lambda2.
+
+Continuous-connectivity paper (Nestmeyer et al., "Decentralized simultaneous
+multi-target exploration using a connected network of multiple robots"),
+Sec. 2 and Appendix A, after Robuffo Giordano et al. (2013).
+
+Weights
+-------
+For robots ``i != j`` with distance ``d_ij`` and line-of-sight clearance
+``d_ijo = min_{s in [0,1], o in O} ||q_i + s (q_j - q_i) - o||``::
+
+    W_ij = A(d_ij) * B(d_ijo) * C_i * C_j                       (App. A, step 2)
+    A(d)   = 1 - S(d; R's, Rs)      range factor, 0 iff d >= Rs          (a)
+    B(d)   = S(d; Ro, R'o)          obstacle factor, 0 iff d_ijo <= Ro   (b)
+    C_i    = prod_{k != i} G(d_ik)  collision factor of robot i          (c)
+    G(d)   = S(d; Rc, R'c)          0 iff d <= Rc
+
+so ``W_ij = 0`` exactly when (a) the pair is out of range, (b) its line of
+sight comes within ``Ro`` of an obstacle point, or (c) some robot ``k`` is
+within ``Rc`` of ``i`` or of ``j``. ``P_ij = A B`` is the *pair factor*.
+
+The smooth step ``S(x; lo, hi)`` is the standard C-infinity transition::
+
+    t = (x - lo) / (hi - lo),   S = 0 for t <= 0,   S = 1 for t >= 1,
+    S = 1 / (1 + exp(1/t - 1/(1 - t)))  for 0 < t < 1.
+
+All its derivatives vanish at both ends, so every weight is C-infinity in the
+positions (away from switches of the closest obstacle point), it is exactly 0
+/ exactly 1 outside the transition band, and ``S(t) + S(1 - t) = 1``.
+
+Potential
+---------
+``V(l2) = k_V (l_null - l2)^2 / (l2 - l_min)`` for ``l_min < l2 < l_null``,
+0 above ``l_null`` and ``+inf`` at or below ``l_min``: zero above
+``lambda2_null``, C1 at ``lambda2_null`` and unbounded as lambda2 falls to
+``lambda2_min`` (App. A, step 3). The force is eq. (17)::
+
+    f_lambda_i = -dV/dl2 * dlambda2/dq_i.
+
+Gradient
+--------
+Eq. (18) of the paper (Yang et al. 2010) reads
+``dlambda2/dq_i = sum_{j in N_i} dW_ij/dq_i (nu_i - nu_j)^2`` with the unit
+Fiedler vector ``nu``. It holds when ``W_ij`` depends only on ``q_i, q_j``;
+with the collision factor, ``q_i`` also enters every weight ``W_jk`` of a
+robot ``j`` within ``R'c`` of ``i``. The exact gradient
+``dlambda2/dq_i = sum_{(j,k)} dW_jk/dq_i (nu_j - nu_k)^2`` then is::
+
+    dlambda2/dq_i = sum_{j in N_i} dP_ij/dq_i C_i C_j (nu_i - nu_j)^2       (pair term, eq. 18)
+                  + sum_{k: d_ik < R'c} r(d_ik) u_ik (T_i + T_k)              (collision terms)
+
+with ``u_ik = (q_i - q_k) / d_ik``, ``r = G'/G`` (the log-derivative of the
+step, finite and computed without dividing by ``G``) and the *local edge
+energy* ``T_i = sum_j W_ij (nu_i - nu_j)^2`` that robot ``j`` can compute and
+send. ``dP_ij/dq_i`` contains the range term ``A'(d_ij) u_ij B`` and the
+obstacle term ``A B'(d_ijo) (1 - s*) (p* - o*) / d_ijo`` (closest point
+``p* = q_i + s* (q_j - q_i)`` on the segment, closest obstacle point ``o*``).
+The finite-difference tests check this expression; eq. (18) alone does not
+pass them when collision factors are active.
+
+Locality
+--------
+The *neighbourhood* of robot ``i`` is ``N_i = {j != i : d_ij < Rs}``; because
+``R'c < Rs`` (checked) it contains the collision neighbours
+``{k : d_ik < R'c}``. Robot ``i``'s gradient is a function of ``q_i``, the
+positions of ``N_i``, the obstacle points within ``Rs + R'o`` of ``q_i``,
+``nu_i`` and the three scalars ``(nu_j, C_j, T_j)`` that each ``j in N_i``
+sends (see :func:`messages` and :func:`lambda2_gradient`). ``C_j`` and
+``T_j`` depend on ``j``'s own neighbours, so with messages recomputed from
+scratch robot ``i``'s force depends on its 2-hop neighbourhood; with the
+messages held fixed it depends only on ``N_i``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.spatial import cKDTree
+from scipy.special import expit
+
+from tether.graph import pairs_within
+from tether.world.grid import OccupancyGrid
+from tether.world.world import World
+
+
+@dataclass(frozen=True)
+class ConnectivityParams:
+    """The parameters of Table 2 (defaults: empty space and town column).
+
+    Attributes
+    ----------
+    rs_inner_m, rs_m
+        ``(R's, Rs)``: the range factor falls from 1 to 0 between them.
+    ro_m, ro_outer_m
+        ``(Ro, R'o)``: the obstacle factor rises from 0 to 1 between them.
+    rc_m, rc_outer_m
+        ``(Rc, R'c)``: the collision factor rises from 0 to 1 between them.
+    lambda2_min, lambda2_null
+        Where the potential is infinite / becomes zero.
+    potential_gain
+        ``k_V`` (newtons); the paper does not state it.
+    """
+
+    rs_inner_m: float = 2.5
+    rs_m: float = 6.0
+    ro_m: float = 0.75
+    ro_outer_m: float = 1.75
+    rc_m: float = 1.0
+    rc_outer_m: float = 2.5
+    lambda2_min: float = 0.0
+    lambda2_null: float = 1.0
+    potential_gain: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not 0 < self.rs_inner_m < self.rs_m:
+            raise ValueError("need 0 < R's < Rs")
+        if not 0 < self.ro_m < self.ro_outer_m:
+            raise ValueError("need 0 < Ro < R'o")
+        if not 0 < self.rc_m < self.rc_outer_m:
+            raise ValueError("need 0 < Rc < R'c")
+        if not self.rc_outer_m < self.rs_m:
+            raise ValueError("need R'c < Rs so that collision neighbours are sensing neighbours")
+        if not 0 <= self.lambda2_min < self.lambda2_null:
+            raise ValueError("need 0 <= lambda2_min < lambda2_null")
+        if not self.potential_gain > 0:
+            raise ValueError("potential_gain must be > 0")
+
+    @property
+    def transition_width_m(self) -> float:
+        """The narrowest of the three transition bands (sets the integrator's step)."""
+        return min(
+            self.rs_m - self.rs_inner_m, self.ro_outer_m - self.ro_m, self.rc_outer_m - self.rc_m
+        )
+
+
+# --------------------------------------------------------------------------- smooth step
+
+
+def smooth_step(x: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    """``S(x; lo, hi)`` and ``dS/dx`` (see the module docstring)."""
+    x = np.asarray(x, dtype=float)
+    width = hi - lo
+    t = (x - lo) / width
+    inside = (t > 0.0) & (t < 1.0)
+    tc = np.where(inside, t, 0.5)
+    g = 1.0 / tc - 1.0 / (1.0 - tc)
+    s_in = expit(-g)
+    ds_in = s_in * expit(g) * (1.0 / tc**2 + 1.0 / (1.0 - tc) ** 2) / width
+    s = np.where(inside, s_in, (t >= 1.0).astype(float))
+    ds = np.where(inside, ds_in, 0.0)
+    return s, ds
+
+
+def smooth_step_log_derivative(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """``S'(x) / S(x)`` for ``x > lo`` (0 for ``x <= lo`` and ``x >= hi``), without dividing."""
+    x = np.asarray(x, dtype=float)
+    width = hi - lo
+    t = (x - lo) / width
+    inside = (t > 0.0) & (t < 1.0)
+    tc = np.where(inside, t, 0.5)
+    g = 1.0 / tc - 1.0 / (1.0 - tc)
+    r = expit(g) * (1.0 / tc**2 + 1.0 / (1.0 - tc) ** 2) / width
+    return np.where(inside, r, 0.0)
+
+
+# --------------------------------------------------------------------------- potential
+
+
+def potential(lambda2: float, params: ConnectivityParams) -> tuple[float, float]:
+    """``V(lambda2)`` and ``dV/dlambda2`` (``(inf, -inf)`` at or below ``lambda2_min``)."""
+    lo, hi, k = params.lambda2_min, params.lambda2_null, params.potential_gain
+    if lambda2 >= hi:
+        return 0.0, 0.0
+    if lambda2 <= lo:
+        return float("inf"), float("-inf")
+    a = hi - lambda2
+    b = lambda2 - lo
+    return k * a * a / b, -k * a * (a + 2.0 * b) / (b * b)
+
+
+def potential_slope(lambda2: np.ndarray, params: ConnectivityParams) -> np.ndarray:
+    """Vectorised ``dV/dlambda2`` (huge but finite at or below ``lambda2_min``)."""
+    lo, hi, k = params.lambda2_min, params.lambda2_null, params.potential_gain
+    lam = np.asarray(lambda2, dtype=float)
+    a = np.maximum(hi - lam, 0.0)
+    b = np.maximum(lam - lo, 1e-12)
+    return -k * a * (a + 2.0 * b) / (b * b)
+
+
+# --------------------------------------------------------------------------- obstacles
+
+
+def surface_points(grid: OccupancyGrid) -> np.ndarray:
+    """Centres of occupied cells with a free (or outside) face-neighbour.
+
+    For any point outside the obstacles, the nearest occupied cell centre is
+    such a surface cell (an interior cell always has a closer occupied
+    neighbour towards the point), so the surface replaces the full point set
+    in every clearance computation at a fraction of the size.
+    """
+    occ = grid.occupied
+    padded = np.pad(occ, 1, constant_values=False)
+    interior = occ.copy()
+    for axis in range(occ.ndim):
+        for shift in (-1, 1):
+            interior &= np.roll(padded, shift, axis=axis)[(slice(1, -1),) * occ.ndim]
+    return grid.to_world(np.argwhere(occ & ~interior)).reshape(-1, occ.ndim)
+
+
+class ObstacleIndex:
+    """The obstacle point set ``O`` with a k-d tree, and an optional grid pre-screen.
+
+    Parameters
+    ----------
+    points
+        ``(m, dim)`` obstacle points.
+    grid
+        If given, ``points`` must be (a superset of the surface of) the grid's
+        occupied cell centres; its distance field then gives a rigorous lower
+        bound of segment clearance that skips the exact search for segments
+        far from every obstacle.
+    """
+
+    def __init__(self, points: np.ndarray, dim: int, grid: OccupancyGrid | None = None) -> None:
+        self.points = np.asarray(points, dtype=float).reshape(-1, dim)
+        self.dim = dim
+        self.grid = grid if len(self.points) else None
+        self.tree = cKDTree(self.points) if len(self.points) else None
+
+    @classmethod
+    def from_world(cls, world: World) -> ObstacleIndex:
+        """Obstacles of a world; grid-derived points are thinned to the surface."""
+        pts = np.asarray(world.obstacle_points, dtype=float).reshape(-1, world.dim)
+        grid = world.grid
+        from_grid = grid is not None and len(pts) and len(pts) == int(grid.occupied.sum())
+        if from_grid and bool(np.all(grid.is_occupied(pts))):
+            return cls(surface_points(grid), world.dim, grid)
+        return cls(pts, world.dim, None)
+
+    @cached_property
+    def _half_diag_m(self) -> float:
+        return 0.5 * self.grid.resolution_m * np.sqrt(self.dim) if self.grid is not None else 0.0
+
+    def _lower_bound(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """A lower bound of every segment's clearance from the grid's distance field."""
+        grid = self.grid
+        step = 0.5 * grid.resolution_m
+        length = np.linalg.norm(b - a, axis=1)
+        n_samples = int(np.ceil(length.max() / step)) + 1 if len(a) else 1
+        s = np.linspace(0.0, 1.0, max(n_samples, 2))
+        pts = a[:, None, :] + s[None, :, None] * (b - a)[:, None, :]
+        clear = grid.clearance_m(pts.reshape(-1, self.dim)).reshape(len(a), -1).min(axis=1)
+        spacing = length / (len(s) - 1)
+        return clear - self._half_diag_m - 0.5 * spacing
+
+    def segment_clearance(
+        self, a: np.ndarray, b: np.ndarray, within_m: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Clearance of segments ``a[k] -> b[k]`` from ``O`` where it is below ``within_m``.
+
+        Returns
+        -------
+        dist, param, closest
+            ``(k,)`` distance (``inf`` where it is ``>= within_m``), ``(k,)``
+            parameter ``s*`` of the closest segment point and ``(k, dim)``
+            the closest obstacle point (undefined where ``dist`` is ``inf``).
+        """
+        a = np.asarray(a, dtype=float).reshape(-1, self.dim)
+        b = np.asarray(b, dtype=float).reshape(-1, self.dim)
+        k = len(a)
+        dist = np.full(k, np.inf)
+        param = np.zeros(k)
+        closest = np.zeros((k, self.dim))
+        if self.tree is None or k == 0:
+            return dist, param, closest
+        todo = np.arange(k)
+        if self.grid is not None:
+            todo = todo[self._lower_bound(a, b) < within_m]
+        if len(todo) == 0:
+            return dist, param, closest
+        ta, tb = a[todo], b[todo]
+        mid = 0.5 * (ta + tb)
+        radius = 0.5 * np.linalg.norm(tb - ta, axis=1) + within_m
+        hits = self.tree.query_ball_point(mid, radius)
+        counts = np.fromiter((len(h) for h in hits), dtype=np.intp, count=len(hits))
+        if counts.sum() == 0:
+            return dist, param, closest
+        owner = np.repeat(np.arange(len(todo)), counts)
+        obs = np.fromiter((p for h in hits for p in h), dtype=np.intp, count=int(counts.sum()))
+        sa, sb, o = ta[owner], tb[owner], self.points[obs]
+        ab = sb - sa
+        denom = np.einsum("kd,kd->k", ab, ab)
+        s = np.clip(np.einsum("kd,kd->k", o - sa, ab) / np.where(denom > 0, denom, 1.0), 0, 1)
+        d = np.linalg.norm(sa + s[:, None] * ab - o, axis=1)
+        order = np.lexsort((d, owner))
+        first = order[np.r_[0, np.flatnonzero(np.diff(owner[order])) + 1]]
+        rows = todo[owner[first]]
+        near = d[first] < within_m
+        rows, first = rows[near], first[near]
+        dist[rows] = d[first]
+        param[rows] = s[first]
+        closest[rows] = o[first]
+        return dist, param, closest
+
+
+# --------------------------------------------------------------------------- weights
+
+
+@dataclass
+class WeightedGraph:
+    """Weights of App. A with everything the gradient needs (arrays over pairs).
+
+    ``pairs`` are the ``(m, 2)`` robot pairs within ``Rs`` (``i < j``);
+    ``coll_pairs`` the ``(mc, 2)`` pairs within ``R'c``. Per pair:
+    ``dP_di``/``dP_dj`` are ``(m, dim)`` derivatives of the pair factor with
+    respect to ``q_i``/``q_j``, ``clearance_m`` the line-of-sight clearance
+    (``inf`` if beyond ``R'o``). Per collision pair: ``coll_unit`` is
+    ``(q_i - q_k) / d_ik`` and ``coll_logd`` the log-derivative ``G'/G``.
+    """
+
+    n: int
+    pairs: np.ndarray
+    pair_factor: np.ndarray
+    dP_di: np.ndarray
+    dP_dj: np.ndarray
+    clearance_m: np.ndarray
+    collision: np.ndarray
+    coll_pairs: np.ndarray
+    coll_unit: np.ndarray
+    coll_logd: np.ndarray
+
+    @property
+    def weights(self) -> np.ndarray:
+        """``W_ij = P_ij C_i C_j`` per pair."""
+        return (
+            self.pair_factor * self.collision[self.pairs[:, 0]] * self.collision[self.pairs[:, 1]]
+        )
+
+    def active(self) -> tuple[np.ndarray, np.ndarray]:
+        """Pairs with ``W_ij > 0`` and their weights (the graph ``G_lambda``)."""
+        w = self.weights
+        keep = w > 0
+        return self.pairs[keep], w[keep]
+
+    def laplacian_dense(self) -> np.ndarray:
+        """Dense weighted Laplacian ``L = diag(W 1) - W``."""
+        lap = np.zeros((self.n, self.n))
+        i, j = self.pairs[:, 0], self.pairs[:, 1]
+        w = self.weights
+        lap[i, j] = -w
+        lap[j, i] = -w
+        lap[np.diag_indices(self.n)] = -lap.sum(axis=1)
+        return lap
+
+
+def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.ndarray:
+    """``C_i = prod_k G(d_ik)`` per robot from the pair values ``G`` (1 if no pair)."""
+    logc = np.zeros(n)
+    zero = np.zeros(n, dtype=bool)
+    if len(coll_pairs):
+        with np.errstate(divide="ignore"):
+            lg = np.log(gamma)
+        finite = gamma > 0
+        np.add.at(logc, coll_pairs[finite, 0], lg[finite])
+        np.add.at(logc, coll_pairs[finite, 1], lg[finite])
+        zero[coll_pairs[~finite, 0]] = True
+        zero[coll_pairs[~finite, 1]] = True
+    return np.where(zero, 0.0, np.exp(logc))
+
+
+def compute_weights(
+    positions: np.ndarray,
+    params: ConnectivityParams,
+    obstacles: ObstacleIndex | None = None,
+    pairs: np.ndarray | None = None,
+) -> WeightedGraph:
+    """The weighted graph ``G_lambda`` of the team (App. A, steps 1-2).
+
+    Parameters
+    ----------
+    positions
+        ``(n, dim)`` robot positions.
+    params
+        Table 2 parameters.
+    obstacles
+        Obstacle index (``None``: free space).
+    pairs
+        Optional precomputed pairs within ``Rs`` (``i < j``); found with a
+        k-d tree otherwise.
+    """
+    q = np.asarray(positions, dtype=float)
+    n, dim = q.shape
+    if pairs is None:
+        pairs = pairs_within(q, params.rs_m)
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
+    i, j = pairs[:, 0], pairs[:, 1]
+    diff = q[i] - q[j]
+    d = np.linalg.norm(diff, axis=1)
+    keep = d < params.rs_m
+    pairs, i, j, diff, d = pairs[keep], i[keep], j[keep], diff[keep], d[keep]
+    u = diff / np.maximum(d, 1e-300)[:, None]
+    s_range, ds_range = smooth_step(d, params.rs_inner_m, params.rs_m)
+    a_fac, da = 1.0 - s_range, -ds_range
+    dP_di = da[:, None] * u
+    clearance = np.full(len(pairs), np.inf)
+    b_fac = np.ones(len(pairs))
+    if obstacles is not None and len(pairs):
+        clearance, s_star, o_star = obstacles.segment_clearance(q[i], q[j], params.ro_outer_m)
+        near = np.isfinite(clearance)
+        b_fac, db = smooth_step(
+            np.where(near, clearance, params.ro_outer_m), params.ro_m, params.ro_outer_m
+        )
+        p_star = q[i] + s_star[:, None] * (q[j] - q[i])
+        grad_d = (p_star - o_star) / np.maximum(clearance, 1e-300)[:, None]
+        grad_d[~near] = 0.0
+        dB_di = (db * (1.0 - s_star))[:, None] * grad_d
+        dB_dj = (db * s_star)[:, None] * grad_d
+        dP_di = dP_di * b_fac[:, None] + a_fac[:, None] * dB_di
+        dP_dj = -da[:, None] * u * b_fac[:, None] + a_fac[:, None] * dB_dj
+    else:
+        dP_dj = -dP_di
+    close = d < params.rc_outer_m
+    coll_pairs = pairs[close]
+    gamma, _ = smooth_step(d[close], params.rc_m, params.rc_outer_m)
+    return WeightedGraph(
+        n=n,
+        pairs=pairs,
+        pair_factor=a_fac * b_fac,
+        dP_di=dP_di,
+        dP_dj=dP_dj,
+        clearance_m=clearance,
+        collision=collision_factor(n, coll_pairs, gamma),
+        coll_pairs=coll_pairs,
+        coll_unit=u[close],
+        coll_logd=smooth_step_log_derivative(d[close], params.rc_m, params.rc_outer_m),
+    )
+
+
+# --------------------------------------------------------------------------- eigenpair
+
+
+def fiedler_pair(
+    graph: WeightedGraph, *, guess: np.ndarray | None = None
+) -> tuple[float, np.ndarray]:
+    """Exact lambda2 and unit Fiedler vector of ``G_lambda`` (dense ``eigh``).
+
+    ``guess`` (a previous Fiedler vector) only fixes the sign of the result,
+    so that a warm estimator or a finite-difference test sees a continuous
+    vector. For large teams use :func:`tether.graph.fiedler` with
+    ``method="sparse"`` on :meth:`WeightedGraph.active`.
+    """
+    if graph.n < 2:
+        return 0.0, np.zeros(graph.n)
+    if graph.n > 400:
+        from tether.graph import fiedler
+
+        pairs, w = graph.active()
+        lam, vec = fiedler(graph.n, pairs, w, method="sparse")
+    else:
+        vals, vecs = np.linalg.eigh(graph.laplacian_dense())
+        lam, vec = max(float(vals[1]), 0.0), vecs[:, 1]
+    if guess is not None and float(vec @ guess) < 0:
+        vec = -vec
+    return lam, vec
+
+
+# --------------------------------------------------------------------------- gradient
+
+
+@dataclass
+class Messages:
+    """What every robot sends its neighbours each step: ``nu_j``, ``C_j``, ``T_j``."""
+
+    nu: np.ndarray
+    collision: np.ndarray
+    edge_energy: np.ndarray
+
+
+def edge_energy(graph: WeightedGraph, nu: np.ndarray) -> np.ndarray:
+    """``T_i = sum_j W_ij (nu_i - nu_j)^2`` per robot (computable by robot ``i``)."""
+    i, j = graph.pairs[:, 0], graph.pairs[:, 1]
+    e = graph.weights * (nu[i] - nu[j]) ** 2
+    return np.bincount(i, e, graph.n) + np.bincount(j, e, graph.n)
+
+
+def messages(graph: WeightedGraph, nu: np.ndarray) -> Messages:
+    """The per-robot broadcast values at the current configuration."""
+    nu = np.asarray(nu, dtype=float)
+    return Messages(nu=nu, collision=graph.collision.copy(), edge_energy=edge_energy(graph, nu))
+
+
+def lambda2_gradient(graph: WeightedGraph, msg: Messages) -> np.ndarray:
+    """``dlambda2/dq_i`` for every robot, ``(n, dim)`` (eq. (18) plus collision terms).
+
+    Robot ``i``'s row uses only its own pairs and collision pairs (all inside
+    ``N_i``), its own ``C_i``, ``nu_i``, ``T_i`` and its neighbours' messages.
+    With ``msg = messages(graph, nu)`` for the exact unit Fiedler vector it is
+    the exact gradient of lambda2 (where lambda2 is simple).
+    """
+    dim = graph.dP_di.shape[1] if graph.dP_di.ndim == 2 else 0
+    grad = np.zeros((graph.n, dim))
+    i, j = graph.pairs[:, 0], graph.pairs[:, 1]
+    cc = msg.collision[i] * msg.collision[j] * (msg.nu[i] - msg.nu[j]) ** 2
+    np.add.at(grad, i, graph.dP_di * cc[:, None])  # eq. (18), pair factor
+    np.add.at(grad, j, graph.dP_dj * cc[:, None])
+    if len(graph.coll_pairs):
+        a, b = graph.coll_pairs[:, 0], graph.coll_pairs[:, 1]
+        coef = graph.coll_logd * (msg.edge_energy[a] + msg.edge_energy[b])
+        term = coef[:, None] * graph.coll_unit  # d d_ab / d q_a = u_ab
+        np.add.at(grad, a, term)
+        np.add.at(grad, b, -term)
+    return grad
+
+
+def connectivity_force(
+    graph: WeightedGraph, lambda2: float | np.ndarray, msg: Messages, params: ConnectivityParams
+) -> np.ndarray:
+    """``f_lambda_i = -dV/dlambda2 * dlambda2/dq_i`` (eq. (17)), ``(n, dim)``.
+
+    ``lambda2`` may be a scalar or each robot's own estimate ``(n,)``.
+    """
+    lam = np.broadcast_to(np.asarray(lambda2, dtype=float), (graph.n,))
+    return -potential_slope(lam, params)[:, None] * lambda2_gradient(graph, msg)
