@@ -292,6 +292,10 @@ def test_missing_and_unreadable_images(tmp_path: Path) -> None:
     with pytest.raises(MapError) as exc:
         load_map(tmp_path / "over.pgm")
     assert_one_line(exc, "over.pgm", "maxval")
+    (tmp_path / "neg.pgm").write_bytes(b"P2\n2 1\n255\n0 -3\n")
+    with pytest.raises(MapError) as exc:
+        load_map(tmp_path / "neg.pgm")
+    assert_one_line(exc, "neg.pgm", "negative")
     (tmp_path / "nohead.pgm").write_bytes(b"P5\n4\n")
     with pytest.raises(MapError) as exc:
         load_map(tmp_path / "nohead.pgm")

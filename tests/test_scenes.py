@@ -57,8 +57,21 @@ def test_make_scene_errors_are_one_line() -> None:
         make_scene("town", 0, street_m=(5, 2))
     with pytest.raises(ScenarioError, match="too small"):
         make_scene("office", 0, door_m=5.0)
-    with pytest.raises(ScenarioError, match="bounds_m"):
-        make_scene("free", 0, dim=2, bounds_m=[[0, 0], [-1, 5]])
+    bad = [
+        ("free", {"dim": 2, "bounds_m": [[0, 0], [-1, 5]]}, "bounds_m"),
+        ("free", {"dim": 2, "bounds_m": [[0, 0], [1]]}, "bounds_m"),
+        ("free", {"dim": 4}, "dim"),
+        ("town", {"empty_lot_p": 2}, "empty_lot_p: must be a number in [0.0, 1.0]"),
+        ("town", {"size_m": ["a", 3]}, "size_m: must be 2 positive numbers"),
+        ("town", {"dim": 2, "slice_height_m": 20.0}, "slice_height_m: must be below"),
+        ("office", {"dim": 1}, "dim: must be 2 or 3"),
+        ("office", {"point_spacing_m": 0}, "point_spacing_m"),
+    ]
+    for name, params, text in bad:
+        with pytest.raises(ScenarioError) as exc:
+            make_scene(name, 0, **params)
+        message = str(exc.value)
+        assert "\n" not in message and f"scene {name!r}" in message and text in message, message
 
 
 # --------------------------------------------------------------------------- surface points

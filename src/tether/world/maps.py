@@ -131,6 +131,8 @@ def _read_pgm(data: bytes) -> tuple[np.ndarray, int]:
         values = np.frombuffer(raster, dtype=dtype).astype(np.int64)
     else:
         raise ValueError("not a P2 or P5 PGM file")
+    if values.min(initial=0) < 0:
+        raise ValueError(f"PGM pixel values must not be negative (got {int(values.min())})")
     if values.max(initial=0) > maxval:
         raise ValueError(f"PGM pixel value {int(values.max())} exceeds maxval {maxval}")
     return values.reshape(height, width).astype(float), maxval

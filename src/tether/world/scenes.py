@@ -62,6 +62,23 @@ def _check_positive(scene: str, name: str, value: Any) -> float:
     return float(value)
 
 
+def _check_number(scene: str, name: str, value: Any, lo: float, hi: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+        raise ScenarioError(
+            f"scene {scene!r}: {name}: must be a number in [{lo}, {hi}] (got {value!r})"
+        )
+    return float(value)
+
+
+def _check_common(scene: str, dim: Any, point_spacing_m: Any, slice_height_m: Any) -> None:
+    """Checks shared by the 3-D scenes that can also be sliced to 2-D."""
+    if dim not in (2, 3) or isinstance(dim, bool):
+        raise ScenarioError(f"scene {scene!r}: dim: must be 2 or 3 (got {dim!r})")
+    if point_spacing_m is not None:
+        _check_positive(scene, "point_spacing_m", point_spacing_m)
+    _check_number(scene, "slice_height_m", slice_height_m, 0.0, float("inf"))
+
+
 def _check_range(scene: str, name: str, value: Any) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in value)
@@ -75,12 +92,23 @@ def _check_range(scene: str, name: str, value: Any) -> tuple[float, float]:
 
 
 def _check_size(scene: str, name: str, value: Any, dim: int) -> np.ndarray:
-    size = np.asarray(value, dtype=float).ravel() if np.ndim(value) else None
-    if size is None or len(size) != dim or not np.all(size > 0):
+    size = _floats(value)
+    if size is None or size.shape != (dim,) or not np.all(size > 0):
         raise ScenarioError(
             f"scene {scene!r}: {name}: must be {dim} positive numbers (got {value!r})"
         )
     return size
+
+
+def _floats(value: Any) -> np.ndarray | None:
+    """``value`` as a float array, or ``None`` if it is not numeric (ragged, strings, ...)."""
+    if isinstance(value, (str, bytes, dict)):
+        return None
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return array if np.isfinite(array).all() else None
 
 
 def _cells(size_m: np.ndarray, resolution_m: float) -> tuple[int, ...]:
@@ -141,11 +169,14 @@ def _world(
 ) -> World:
     """A 3-D scene as a World, or its horizontal slice at ``slice_height_m`` if ``dim == 2``."""
     if dim == 2:
+        if slice_height_m >= occupied.shape[2] * resolution_m:
+            raise ScenarioError(
+                f"scene {name!r}: slice_height_m: must be below the scene height "
+                f"{occupied.shape[2] * resolution_m} m (got {slice_height_m!r})"
+            )
         iz = min(max(int(slice_height_m / resolution_m), 0), occupied.shape[2] - 1)
         occupied = _fill_pockets(np.ascontiguousarray(occupied[:, :, iz]))
         meta = {**meta, "slice_height_m": slice_height_m}
-    elif dim != 3:
-        raise ScenarioError(f"scene {name!r}: dim: must be 2 or 3 (got {dim!r})")
     grid = OccupancyGrid(occupied, resolution_m, np.zeros(dim))
     points = surface_points(grid, point_spacing_m)
     return World(dim=dim, grid=grid, obstacle_points=points, name=name, meta=meta)
@@ -160,8 +191,8 @@ def free(rng: np.random.Generator | None = None, *, dim: int = 2, bounds_m: Any 
     if dim not in (2, 3):
         raise ScenarioError(f"scene 'free': dim: must be 2 or 3 (got {dim!r})")
     if bounds_m is not None:
-        bounds = np.asarray(bounds_m, dtype=float)
-        if bounds.shape != (2, dim) or not np.all(bounds[1] > bounds[0]):
+        bounds = _floats(bounds_m)
+        if bounds is None or bounds.shape != (2, dim) or not np.all(bounds[1] > bounds[0]):
             raise ScenarioError(
                 f"scene 'free': bounds_m: must be [[lower corner], [upper corner]] with "
                 f"{dim} numbers each, upper > lower (got {bounds_m!r})"
@@ -265,6 +296,9 @@ def town(
     streets = _check_range("town", "street_m", street_m)
     blocks = _check_range("town", "block_m", block_m)
     heights = _check_range("town", "building_height_m", building_height_m)
+    setback_m = _check_number("town", "setback_m", setback_m, 0.0, float("inf"))
+    empty_lot_p = _check_number("town", "empty_lot_p", empty_lot_p, 0.0, 1.0)
+    _check_common("town", dim, point_spacing_m, slice_height_m)
     occupied = np.zeros(_cells(np.append(size, height), res), dtype=bool)
     buildings: list[list[float]] = []
     lot_m = 0.5 * blocks[0]
@@ -346,6 +380,7 @@ def office(
     door = _check_positive("office", "door_m", door_m)
     door_h = _check_positive("office", "door_height_m", door_height_m)
     wall = _check_positive("office", "wall_m", wall_m)
+    _check_common("office", dim, point_spacing_m, slice_height_m)
     width, length = size
     depth = (width - corridor) / 2 - 2 * wall  # room depth on each side
     if depth < door or rooms_range[0] < door + 2 * wall:
@@ -463,10 +498,10 @@ def user_points(
     dim = points.shape[1]
     res = _check_positive("user_points", "resolution_m", resolution_m)
     if bounds_m is None:
-        margin = max(float(margin_m), res)
+        margin = max(_check_number("user_points", "margin_m", margin_m, 0.0, float("inf")), res)
         bounds = np.stack([points.min(axis=0) - margin, points.max(axis=0) + margin])
     else:
-        bounds = np.asarray(bounds_m, dtype=float) if np.ndim(bounds_m) == 2 else None
+        bounds = _floats(bounds_m)
         if bounds is None or bounds.shape != (2, dim) or not np.all(bounds[1] > bounds[0]):
             raise MapError(
                 f"{path}: bounds_m: must be [[lower corner], [upper corner]] with {dim} "
