@@ -223,11 +223,11 @@ def read_scenario_data(path_or_name: str | Path) -> tuple[dict[str, Any], str, P
     """Raw scenario data, its label for messages, and the folder relative paths refer to."""
     text = str(path_or_name)
     path = Path(text)
-    if not path.exists() and not text.endswith((".yaml", ".yml")) and "/" not in text:
-        if text in builtin_scenarios():
-            ref = resources.files(BUILTIN_PACKAGE) / f"{text}.yaml"
-            with resources.as_file(ref) as real:
-                return _read_yaml(real, text), text, real.parent
+    bare_name = not text.endswith((".yaml", ".yml")) and "/" not in text
+    if not path.exists() and bare_name and text in builtin_scenarios():
+        ref = resources.files(BUILTIN_PACKAGE) / f"{text}.yaml"
+        with resources.as_file(ref) as real:
+            return _read_yaml(real, text), text, real.parent
     return _read_yaml(path, text), text, path.parent
 
 

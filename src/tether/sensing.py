@@ -28,7 +28,7 @@ from typing import Literal
 
 import numpy as np
 
-from tether.geometry import point_segment_distance, random_perpendicular, unit
+from tether.geometry import random_perpendicular, unit
 from tether.graph import pairs_within
 from tether.world.world import World
 
@@ -112,10 +112,17 @@ def _occluded(positions: np.ndarray, pairs: np.ndarray, body_radius_m: float) ->
     pi, pk = i[pair_idx], k[pair_idx]
     keep = j != pk
     pair_idx, j, pi, pk = pair_idx[keep], j[keep], pi[keep], pk[keep]
-    xi, xk, xj = positions[pi], positions[pk], positions[j]
-    d_ik = np.linalg.norm(xk - xi, axis=1)
-    between = (np.linalg.norm(xj - xi, axis=1) < d_ik) & (np.linalg.norm(xj - xk, axis=1) < d_ik)
-    blocks = between & (point_segment_distance(xj, xi, xk) < body_radius_m)
+    # squared distances only: |ij|^2 < |ik|^2, |kj|^2 < |ik|^2, and the distance from
+    # j to the line i-k (its foot then lies inside the segment) below the body radius
+    xi = positions[pi]
+    ik = positions[pk] - xi
+    ij = positions[j] - xi
+    d2_ik = np.einsum("kd,kd->k", ik, ik)
+    d2_ij = np.einsum("kd,kd->k", ij, ij)
+    proj = np.einsum("kd,kd->k", ij, ik)
+    d2_kj = d2_ik - 2.0 * proj + d2_ij
+    perp2 = d2_ij - proj * proj / np.maximum(d2_ik, 1e-300)
+    blocks = (d2_ij < d2_ik) & (d2_kj < d2_ik) & (perp2 < body_radius_m**2)
     out = np.zeros(m, dtype=bool)
     out[pair_idx[blocks]] = True
     return out

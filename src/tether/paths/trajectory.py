@@ -38,7 +38,7 @@ class Polyline:
         return self.waypoints[k] + frac * (self.waypoints[k + 1] - self.waypoints[k])
 
     def project(self, point: np.ndarray, s_min: float = 0.0, window_m: float = np.inf) -> float:
-        """Arc length of the closest path point to ``point`` within ``[s_min, s_min + window_m]``."""
+        """Arc length of the path point closest to ``point`` in ``[s_min, s_min + window_m]``."""
         best_s, best_d = s_min, np.inf
         for k, (a, b) in enumerate(zip(self.waypoints[:-1], self.waypoints[1:], strict=True)):
             s0, s1 = self._cum[k], self._cum[k + 1]

@@ -51,7 +51,10 @@ class SilentParams(BaseModel):
     cost: Literal["desired_distance", "farthest"] = "desired_distance"
     d0_m: float = Field(default=11.0, gt=0, description="desired distance d0 of cost (13)")
     gamma: float = Field(default=0.2, gt=0, description="gain of the gradient step (14)")
-    leader: int = Field(default=-1, description="index of the leader R_N (default: last robot)")
+    leader: int | None = Field(
+        default=None,
+        description="index of the leader R_N (default: the robot nearest the trajectory's start)",
+    )
     trajectory: TrajectoryParams
     max_speed_mps: float | None = Field(default=None, gt=0)
     min_separation_m: float = Field(default=0.0, ge=0)
@@ -83,7 +86,7 @@ class SilentStrategy(StrategyBase):
         *,
         d_max_m: float,
         trajectory: Polyline | TimeFunction,
-        leader: int = -1,
+        leader: int | None = None,
         cost: str = "desired_distance",
         d0_m: float = 11.0,
         gamma: float = 0.2,
@@ -139,7 +142,7 @@ class SilentStrategy(StrategyBase):
                     "expected 'package.module:callable'"
                 ) from None
         n = initial.n
-        if not -n <= params.leader < n:
+        if params.leader is not None and not -n <= params.leader < n:
             raise ScenarioError(
                 f"{src}: strategy.params.leader: must be a robot index in [-{n}, {n - 1}] "
                 f"(got {params.leader})"
@@ -165,7 +168,15 @@ class SilentStrategy(StrategyBase):
     def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
         super().reset(world, state, rng)
         self.world = world
-        self.leader = self.leader_arg % state.n
+        if self.leader_arg is None:
+            start = (
+                self.trajectory.waypoints[0]
+                if isinstance(self.trajectory, Polyline)
+                else np.asarray(self.trajectory(0.0), dtype=float)
+            )
+            self.leader = int(np.argmin(np.linalg.norm(state.positions - start, axis=1)))
+        else:
+            self.leader = self.leader_arg % state.n
         self.progress_m = 0.0
         self._done = False
         self._leader_travel_m = 0.0

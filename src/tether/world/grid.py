@@ -108,9 +108,7 @@ class OccupancyGrid:
         out[ok] = self.distance_field_m[tuple(cells[ok].T)]
         return out
 
-    def segments_clear(
-        self, a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0
-    ) -> np.ndarray:
+    def segments_clear(self, a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
         """Boolean ``(k,)``: segment ``a[k] -> b[k]`` keeps ``clearance_m`` from obstacles.
 
         Samples each segment every half cell and looks the samples up in the

@@ -74,9 +74,7 @@ class World:
                 ok &= ~self.grid.is_occupied(points)
         return ok
 
-    def segments_clear(
-        self, a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0
-    ) -> np.ndarray:
+    def segments_clear(self, a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
         """Boolean ``(k,)``: straight segments ``a[k] -> b[k]`` avoid obstacles."""
         a = np.atleast_2d(np.asarray(a, dtype=float))
         b = np.atleast_2d(np.asarray(b, dtype=float))
