@@ -75,6 +75,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from itertools import chain
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -217,10 +218,10 @@ class ObstacleIndex:
     points
         ``(m, dim)`` obstacle points.
     grid
-        If given, ``points`` must be (a superset of the surface of) the grid's
-        occupied cell centres; its distance field then gives a rigorous lower
-        bound of segment clearance that skips the exact search for segments
-        far from every obstacle.
+        If given, every point must lie in an occupied cell of the grid; its
+        distance field (centre to nearest occupied centre) then gives a
+        rigorous lower bound of segment clearance, which skips the exact
+        search for segments far from every obstacle.
     """
 
     def __init__(self, points: np.ndarray, dim: int, grid: OccupancyGrid | None = None) -> None:
@@ -231,13 +232,18 @@ class ObstacleIndex:
 
     @classmethod
     def from_world(cls, world: World) -> ObstacleIndex:
-        """Obstacles of a world; grid-derived points are thinned to the surface."""
+        """Obstacles of a world, with the grid pre-screen when the points lie in occupied cells.
+
+        A point set equal to all occupied cell centres is thinned to the
+        surface first (exact for clearance queries, see :func:`surface_points`).
+        """
         pts = np.asarray(world.obstacle_points, dtype=float).reshape(-1, world.dim)
         grid = world.grid
-        from_grid = grid is not None and len(pts) and len(pts) == int(grid.occupied.sum())
-        if from_grid and bool(np.all(grid.is_occupied(pts))):
-            return cls(surface_points(grid), world.dim, grid)
-        return cls(pts, world.dim, None)
+        if grid is None or not len(pts) or not bool(np.all(grid.is_occupied(pts))):
+            return cls(pts, world.dim, None)
+        if len(pts) == int(grid.occupied.sum()):
+            pts = surface_points(grid)
+        return cls(pts, world.dim, grid)
 
     @cached_property
     def _half_diag_m(self) -> float:
@@ -253,7 +259,8 @@ class ObstacleIndex:
         pts = a[:, None, :] + s[None, :, None] * (b - a)[:, None, :]
         clear = grid.clearance_m(pts.reshape(-1, self.dim)).reshape(len(a), -1).min(axis=1)
         spacing = length / (len(s) - 1)
-        return clear - self._half_diag_m - 0.5 * spacing
+        # query point to its cell centre, obstacle point to its cell centre, sample spacing
+        return clear - 2.0 * self._half_diag_m - 0.5 * spacing
 
     def segment_clearance(
         self, a: np.ndarray, b: np.ndarray, within_m: float
@@ -281,14 +288,24 @@ class ObstacleIndex:
         if len(todo) == 0:
             return dist, param, closest
         ta, tb = a[todo], b[todo]
-        mid = 0.5 * (ta + tb)
-        radius = 0.5 * np.linalg.norm(tb - ta, axis=1) + within_m
-        hits = self.tree.query_ball_point(mid, radius)
-        counts = np.fromiter((len(h) for h in hits), dtype=np.intp, count=len(hits))
+        # Candidates: obstacle points within r of samples spaced ``within_m`` along each
+        # segment; any point within ``within_m`` of the segment is within r of a sample.
+        length = np.linalg.norm(tb - ta, axis=1)
+        n_samp = np.ceil(length / within_m).astype(np.intp) + 1
+        seg = np.repeat(np.arange(len(todo)), n_samp)
+        frac = (np.arange(n_samp.sum()) - np.repeat(np.cumsum(n_samp) - n_samp, n_samp)) / (
+            np.repeat(np.maximum(n_samp - 1, 1), n_samp)
+        )
+        samples = ta[seg] + frac[:, None] * (tb - ta)[seg]
+        radius = np.sqrt(within_m**2 + (0.5 * within_m) ** 2) * (1 + 1e-9)
+        hits = self.tree.query_ball_point(samples, radius)
+        counts = np.fromiter(map(len, hits), dtype=np.intp, count=len(hits))
         if counts.sum() == 0:
             return dist, param, closest
-        owner = np.repeat(np.arange(len(todo)), counts)
-        obs = np.fromiter((p for h in hits for p in h), dtype=np.intp, count=int(counts.sum()))
+        flat = np.fromiter(chain.from_iterable(hits), dtype=np.intp, count=int(counts.sum()))
+        code = np.unique(np.repeat(seg, counts).astype(np.int64) * len(self.points) + flat)
+        owner = (code // len(self.points)).astype(np.intp)
+        obs = (code % len(self.points)).astype(np.intp)
         sa, sb, o = ta[owner], tb[owner], self.points[obs]
         ab = sb - sa
         denom = np.einsum("kd,kd->k", ab, ab)

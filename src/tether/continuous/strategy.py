@@ -1,0 +1,339 @@
+"""Strategy ``connectivity``: eq. (1) driven only by ``f_lambda`` and an external force.
+
+Each robot obeys ``M dv/dt = -B v + f_lambda + f_ext`` (eq. (1)), where
+``f_lambda`` is the generalized connectivity force (App. A, eq. (17)-(18),
+:mod:`tether.continuous.connectivity`) and ``f_ext`` a bounded external force
+standing in for the traveling force of Algorithm 2: nothing, constant
+forces, operator goals (a saturated spring to a goal point) or random pulls
+(a random direction and magnitude per robot, redrawn every ``hold_s``).
+
+lambda2 and the Fiedler vector come either from an exact eigensolver
+(``eigensolver: exact``) or from the decentralized estimator of Yang et al.
+(``eigensolver: estimator``, :mod:`tether.continuous.estimation`) running over
+the message layer (:mod:`tether.comm`) with optional loss, delay and robot
+failures. The motion is integrated by :func:`tether.continuous.dynamics.integrate`.
+
+Example scenario (``src/tether/scenarios/connectivity_town.yaml``)::
+
+    strategy:
+      name: connectivity
+      params:
+        preset: outdoor
+        eigensolver: exact
+        external: {kind: random, magnitude_n: 3.0, hold_s: 2.0}
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from tether.comm import CommParams, MessageLayer
+from tether.continuous.connectivity import (
+    ConnectivityParams,
+    ObstacleIndex,
+    compute_weights,
+    connectivity_force,
+    fiedler_pair,
+    messages,
+)
+from tether.continuous.dynamics import IntegratorParams, integrate
+from tether.continuous.estimation import EstimatorParams, FiedlerEstimator, estimate_errors
+from tether.registry import STRATEGIES
+from tether.sim import StepContext, StrategyBase, TeamState
+from tether.world.world import World
+
+# Table 2 of the paper: (R's, Rs), (Ro, R'o), (Rc, R'c), (lambda2_min, lambda2_null).
+TABLE2: dict[str, dict[str, float]] = {
+    "outdoor": {  # "empty space and town"
+        "rs_inner_m": 2.5, "rs_m": 6.0, "ro_m": 0.75, "ro_outer_m": 1.75,
+        "rc_m": 1.0, "rc_outer_m": 2.5, "lambda2_min": 0.0, "lambda2_null": 1.0,
+    },
+    "office": {
+        "rs_inner_m": 1.1, "rs_m": 2.5, "ro_m": 0.25, "ro_outer_m": 0.6,
+        "rc_m": 0.8, "rc_outer_m": 1.1, "lambda2_min": 0.0, "lambda2_null": 1.0,
+    },
+    "experiment": {  # Sec. 4.2, the quadrotor experiment
+        "rs_inner_m": 1.4, "rs_m": 2.5, "ro_m": 0.5, "ro_outer_m": 0.75,
+        "rc_m": 1.0, "rc_outer_m": 1.4, "lambda2_min": 0.0, "lambda2_null": 1.0,
+    },
+}  # fmt: skip
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class ExternalForce(_Strict):
+    """The external force ``f_i`` of eq. (1), bounded by ``magnitude_n`` per robot.
+
+    ``none``; ``constant`` (``forces``: one vector for all robots or one per
+    robot); ``goal`` (operator commands: ``robots`` are pulled towards
+    ``goals`` by ``gain * (goal - q)``, saturated); ``random`` (each robot a
+    uniformly random direction and a magnitude uniform in
+    ``[0, magnitude_n]``, redrawn every ``hold_s``; ``planar`` keeps them
+    horizontal in 3-D).
+    """
+
+    kind: Literal["none", "constant", "goal", "random"] = "none"
+    magnitude_n: float = Field(default=1.0, ge=0)
+    hold_s: float = Field(default=2.0, gt=0)
+    planar: bool = False
+    forces: list[list[float]] | None = None
+    robots: list[int] = Field(default_factory=list)
+    goals: list[list[float]] = Field(default_factory=list)
+    gain_n_per_m: float = Field(default=1.0, ge=0)
+
+
+class EstimatorConfig(_Strict):
+    """Decentralized estimator and message-layer faults (``eigensolver: estimator``)."""
+
+    rounds_per_substep: int = Field(default=20, ge=1)
+    warmup_rounds: int = Field(default=3000, ge=0)
+    k1: float = 4.0
+    k2: float = 1.0
+    k3: float = 2.0
+    gamma: float = 1.0
+    kp: float = 2.0
+    ki: float = 1.0
+    step_scale: float = Field(default=1.0, gt=0, le=1)
+    loss_probability: float = Field(default=0.0, ge=0, lt=1)
+    delay_rounds: int = Field(default=0, ge=0)
+    failures: dict[int, int] = Field(default_factory=dict)
+
+
+class ConnectivityStrategyParams(_Strict):
+    """Parameters of strategy ``connectivity``.
+
+    ``preset`` picks a column of Table 2 (``outdoor`` = empty space and town,
+    ``office``, ``experiment`` = Sec. 4.2); any parameter given explicitly
+    overrides the preset. The other Table 2 entries (``Rgrid``, ``sigma``,
+    ``v_cruise``, ``(x_c, x_M)``, ``Delta t``, ``Rz``) belong to the traveling
+    force of Algorithms 1-2 and are not used here.
+    """
+
+    preset: Literal["outdoor", "office", "experiment"] = "outdoor"
+    rs_inner_m: float = Field(default=2.5, gt=0)
+    rs_m: float = Field(default=6.0, gt=0)
+    ro_m: float = Field(default=0.75, gt=0)
+    ro_outer_m: float = Field(default=1.75, gt=0)
+    rc_m: float = Field(default=1.0, gt=0)
+    rc_outer_m: float = Field(default=2.5, gt=0)
+    lambda2_min: float = Field(default=0.0, ge=0)
+    lambda2_null: float = Field(default=1.0, gt=0)
+    potential_gain_n: float = Field(default=1.0, gt=0)
+    mass_kg: float = Field(default=1.0, gt=0)
+    damping_ns_per_m: float = Field(default=2.0, ge=0)
+    max_step_fraction: float = Field(default=0.1, gt=0, le=1)
+    keep_fraction: float = Field(default=0.5, ge=0, lt=1)
+    safeguard: bool = True
+    eigensolver: Literal["exact", "estimator"] = "exact"
+    estimator: EstimatorConfig = Field(default_factory=EstimatorConfig)
+    external: ExternalForce = Field(default_factory=ExternalForce)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _apply_preset(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            preset = data.get("preset", "outdoor")
+            if preset in TABLE2:
+                data = {**TABLE2[preset], **data}
+        return data
+
+    def connectivity(self) -> ConnectivityParams:
+        return ConnectivityParams(
+            rs_inner_m=self.rs_inner_m,
+            rs_m=self.rs_m,
+            ro_m=self.ro_m,
+            ro_outer_m=self.ro_outer_m,
+            rc_m=self.rc_m,
+            rc_outer_m=self.rc_outer_m,
+            lambda2_min=self.lambda2_min,
+            lambda2_null=self.lambda2_null,
+            potential_gain=self.potential_gain_n,
+        )
+
+    def integrator(self) -> IntegratorParams:
+        width = self.connectivity().transition_width_m
+        return IntegratorParams(
+            mass_kg=self.mass_kg,
+            damping_ns_per_m=self.damping_ns_per_m,
+            max_step_m=self.max_step_fraction * width,
+            keep_fraction=self.keep_fraction,
+        )
+
+    def estimator_params(self) -> EstimatorParams:
+        e = self.estimator
+        return EstimatorParams(e.k1, e.k2, e.k3, e.gamma, e.kp, e.ki, e.step_scale)
+
+
+def external_force(
+    spec: ExternalForce, q: np.ndarray, rng: np.random.Generator, held: np.ndarray | None
+) -> np.ndarray:
+    """``f_i`` per robot, ``(n, dim)``, never longer than ``spec.magnitude_n``."""
+    n, dim = q.shape
+    if spec.kind == "none":
+        return np.zeros((n, dim))
+    if spec.kind == "constant":
+        f = np.broadcast_to(np.asarray(spec.forces or [[0.0] * dim], dtype=float), (n, dim))
+    elif spec.kind == "goal":
+        f = np.zeros((n, dim))
+        for robot, goal in zip(spec.robots, spec.goals, strict=True):
+            f[robot] = spec.gain_n_per_m * (np.asarray(goal, dtype=float) - q[robot])
+    else:
+        if held is not None:
+            return held
+        direction = rng.normal(size=(n, dim))
+        if spec.planar and dim == 3:
+            direction[:, 2] = 0.0
+        direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-12)
+        f = direction * rng.uniform(0.0, spec.magnitude_n, size=(n, 1))
+    norm = np.linalg.norm(f, axis=1, keepdims=True)
+    return f * np.minimum(1.0, spec.magnitude_n / np.maximum(norm, 1e-300))
+
+
+@STRATEGIES.register("connectivity")
+class ConnectivityStrategy(StrategyBase):
+    """Generalized connectivity force plus an external force (eq. (1), App. A)."""
+
+    name = "connectivity"
+    Params = ConnectivityStrategyParams
+
+    def __init__(self, params: ConnectivityStrategyParams | None = None) -> None:
+        super().__init__()
+        self.params = params or ConnectivityStrategyParams()
+        self.conn = self.params.connectivity()
+        self.integ = self.params.integrator()
+
+    @classmethod
+    def from_scenario(
+        cls,
+        params: ConnectivityStrategyParams,
+        scenario: Any,
+        world: World,
+        initial_state: TeamState,
+        rng: np.random.Generator,
+    ) -> ConnectivityStrategy:
+        return cls(params)
+
+    # ----------------------------------------------------------------- lifecycle
+
+    def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
+        super().reset(world, state, rng)
+        self.world = world
+        self.obstacles = ObstacleIndex.from_world(world)
+        self.n = state.n
+        self._nu: np.ndarray | None = None
+        self._held: np.ndarray | None = None
+        self._held_until = -1.0
+        self._current = None
+        self._stats = {"substeps": 0, "rejections": 0, "stalls": 0}
+        self._min = {"lambda2": np.inf, "distance": np.inf, "clearance": np.inf}
+        self._est_err: list[tuple[float, float]] = []
+        self.estimator: FiedlerEstimator | None = None
+        graph = compute_weights(state.positions, self.conn, self.obstacles)
+        lam, nu = fiedler_pair(graph)
+        if not lam > self.conn.lambda2_min:
+            raise ValueError(
+                f"the initial weighted graph has lambda2 = {lam:.3g} <= lambda2_min = "
+                f"{self.conn.lambda2_min}: place robots within R's = {self.conn.rs_inner_m} m, "
+                f"farther than R'c = {self.conn.rc_outer_m} m apart and with lines of sight "
+                f"farther than R'o = {self.conn.ro_outer_m} m from obstacles"
+            )
+        self._nu = nu
+        if self.params.eigensolver == "estimator":
+            e = self.params.estimator
+            comm = CommParams(e.loss_probability, e.delay_rounds, dict(e.failures))
+            layer = MessageLayer(self.n, comm, rng)
+            self.estimator = FiedlerEstimator(self.n, self.params.estimator_params(), layer, rng)
+            self.estimator.update(graph, e.warmup_rounds)
+        self._observe(state.positions, graph, lam, nu)
+
+    # ----------------------------------------------------------------- evaluation
+
+    def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
+        graph = compute_weights(q, self.conn, self.obstacles)
+        if self.params.eigensolver == "exact" or self.params.safeguard:
+            lam, nu = fiedler_pair(graph, guess=self._nu)
+        else:
+            lam, nu = np.inf, None
+        return lam, (graph, lam, nu)
+
+    def _force(self, cache: Any) -> np.ndarray:
+        graph, lam, nu = cache
+        if self.estimator is None:
+            self._nu = nu
+            return connectivity_force(graph, lam, messages(graph, nu), self.conn)
+        est = self.estimator
+        est.update(graph, self.params.estimator.rounds_per_substep)
+        if nu is not None:
+            self._nu = nu
+        f = connectivity_force(graph, est.lambda2, messages(graph, est.vector), self.conn)
+        f[~est.comm.alive()] = 0.0  # a failed robot exerts no force
+        return f
+
+    def step(self, ctx: StepContext) -> TeamState:
+        self._step = ctx.step
+        q, v = ctx.state.positions, ctx.state.velocities
+        spec = self.params.external
+        if spec.kind == "random" and ctx.t_s >= self._held_until:
+            self._held = None
+            self._held_until = ctx.t_s + spec.hold_s
+        f_ext = external_force(spec, q, ctx.rng, self._held)
+        if spec.kind == "random":
+            self._held = f_ext
+        if self.estimator is not None:
+            f_ext = f_ext * self.estimator.comm.alive()[:, None]
+        q, v, ev, stats = integrate(
+            q, v, ctx.dt_s, self._evaluate, self._force, f_ext, self.integ,
+            self.conn.lambda2_min, self._current,
+        )  # fmt: skip
+        self._current = ev
+        self._stats["substeps"] += stats.substeps
+        self._stats["rejections"] += stats.rejections
+        self._stats["stalls"] += int(stats.stalled)
+        if stats.stalled:
+            self.emit("stall", substeps=stats.substeps)
+        graph, lam, nu = ev[1]
+        self._observe(q, graph, lam, nu)
+        return TeamState(q, v)
+
+    # ----------------------------------------------------------------- metrics
+
+    def _observe(self, q: np.ndarray, graph: Any, lam: float, nu: np.ndarray | None) -> None:
+        """Track the invariants (exact lambda2, distances, clearances) for ``metrics``."""
+        if nu is None and self.n <= 500:
+            lam, nu = fiedler_pair(graph, guess=self._nu)
+        if np.isfinite(lam):
+            self._min["lambda2"] = min(self._min["lambda2"], float(lam))
+        if len(graph.pairs):
+            d = np.linalg.norm(q[graph.pairs[:, 0]] - q[graph.pairs[:, 1]], axis=1)
+            self._min["distance"] = min(self._min["distance"], float(d.min()))
+        if self.obstacles.tree is not None:
+            self._min["clearance"] = min(
+                self._min["clearance"], float(self.obstacles.tree.query(q)[0].min())
+            )
+        if self.estimator is not None and nu is not None:
+            self._est_err.append(estimate_errors(self.estimator, lam, nu))
+
+    def metrics(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "min_lambda2_weighted": self._min["lambda2"],
+            "min_robot_distance_m": self._min["distance"],
+            "min_obstacle_clearance_m": self._min["clearance"],
+            "substeps": self._stats["substeps"],
+            "rejected_substeps": self._stats["rejections"],
+            "stalls": self._stats["stalls"],
+            "eigensolver": self.params.eigensolver,
+        }
+        if self._est_err:
+            err = np.asarray(self._est_err)
+            out["estimator_lambda2_rel_error_max"] = float(err[:, 0].max())
+            out["estimator_lambda2_rel_error_mean"] = float(err[:, 0].mean())
+            out["estimator_vector_error_max"] = float(err[:, 1].max())
+        if self.estimator is not None:
+            out["message_delivery_ratio"] = self.estimator.comm.delivery_ratio
+        return {k: (None if isinstance(v, float) and not np.isfinite(v) else v)
+                for k, v in out.items()}  # fmt: skip
