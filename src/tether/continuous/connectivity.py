@@ -199,7 +199,9 @@ def surface_points(grid: OccupancyGrid) -> np.ndarray:
     For any point outside the obstacles, the nearest occupied cell centre is
     such a surface cell (an interior cell always has a closer occupied
     neighbour towards the point), so the surface replaces the full point set
-    in every clearance computation at a fraction of the size.
+    in every clearance computation at a fraction of the size. A segment that
+    crosses an obstacle enters it through a surface cell, so its clearance is
+    below half a cell diagonal with either point set.
     """
     occ = grid.occupied
     padded = np.pad(occ, 1, constant_values=False)
@@ -418,8 +420,9 @@ def compute_weights(
     keep = d < params.rs_m
     pairs, i, j, diff, d = pairs[keep], i[keep], j[keep], diff[keep], d[keep]
     u = diff / np.maximum(d, 1e-300)[:, None]
-    s_range, ds_range = smooth_step(d, params.rs_inner_m, params.rs_m)
-    a_fac, da = 1.0 - s_range, -ds_range
+    # A(d) = 1 - S(d) = S(R's + Rs - d) by symmetry; the mirrored form keeps tiny values exact
+    a_fac, da = smooth_step(params.rs_inner_m + params.rs_m - d, params.rs_inner_m, params.rs_m)
+    da = -da
     dP_di = da[:, None] * u
     clearance = np.full(len(pairs), np.inf)
     b_fac = np.ones(len(pairs))

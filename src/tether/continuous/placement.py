@@ -1,0 +1,75 @@
+"""Random team placements that start inside the connectivity strategy's safe set.
+
+The connectivity force keeps ``lambda2 > lambda2_min`` only if it holds at the
+start (App. A). :func:`safe_team` grows a team one robot at a time, each new
+robot within ``[R'c, R's]`` of a random earlier robot (weight 1 with it),
+farther than ``R'c`` from all others and ``R'o`` from every obstacle point, so
+the initial weighted graph is connected.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tether.continuous.connectivity import (
+    ConnectivityParams,
+    ObstacleIndex,
+    compute_weights,
+    fiedler_pair,
+)
+from tether.world.world import World
+
+
+def safe_team(
+    world: World,
+    n: int,
+    params: ConnectivityParams,
+    rng: np.random.Generator,
+    *,
+    obstacles: ObstacleIndex | None = None,
+    margin_m: float = 1.0,
+    height_m: tuple[float, float] | None = None,
+    max_tries: int = 50,
+) -> np.ndarray:
+    """``(n, dim)`` positions with ``lambda2 > lambda2_min`` in ``G_lambda``.
+
+    Parameters
+    ----------
+    margin_m
+        Keep the first robot this far inside the world's bounds.
+    height_m
+        For 3-D worlds, the range of heights of the first robot.
+    """
+    obstacles = obstacles or ObstacleIndex.from_world(world)
+    dim = world.dim
+    lo, hi = (
+        world.bounds_m if world.bounds_m is not None else (-np.full(dim, 10.0), np.full(dim, 10.0))
+    )
+    for _ in range(max_tries):
+        start = rng.uniform(lo + margin_m, hi - margin_m)
+        if dim == 3 and height_m is not None:
+            start[2] = rng.uniform(*height_m)
+        pts = [start]
+        for _ in range(200 * n):
+            if len(pts) == n:
+                break
+            anchor = pts[rng.integers(len(pts))]
+            direction = rng.normal(size=dim)
+            direction /= np.linalg.norm(direction)
+            cand = anchor + direction * rng.uniform(params.rc_outer_m, params.rs_inner_m)
+            if np.min(np.linalg.norm(np.asarray(pts) - cand, axis=1)) <= params.rc_outer_m:
+                continue
+            if not world.in_bounds(cand[None])[0]:
+                continue
+            if obstacles.tree is not None and obstacles.tree.query(cand)[0] <= params.ro_outer_m:
+                continue
+            pts.append(cand)
+        if len(pts) < n:
+            continue
+        q = np.asarray(pts)
+        if obstacles.tree is not None and obstacles.tree.query(q[0])[0] <= params.ro_outer_m:
+            continue
+        lam, _ = fiedler_pair(compute_weights(q, params, obstacles))
+        if lam > params.lambda2_min:
+            return q
+    raise ValueError(f"could not place {n} robots with a connected weighted graph")
