@@ -33,23 +33,30 @@ class LinkModel(Protocol):
 def segment_free(
     free: np.ndarray, a: np.ndarray, b: np.ndarray, step_cells: float = 0.5, chunk: int = 4096
 ) -> np.ndarray:
-    """Boolean ``(k,)``: every half-cell sample of segment ``a[k] -> b[k]`` lies in ``free``.
+    """Boolean ``(k,)``: every sample of segment ``a[k] -> b[k]`` lies in ``free``.
 
-    Points outside the grid count as blocked.
+    Samples are ``step_cells`` apart from the lexicographically smaller end
+    (plus the far end), so the answer is symmetric and independent of the
+    batch. Points outside the grid count as blocked.
     """
     a = np.atleast_2d(np.asarray(a, dtype=float))
     b = np.atleast_2d(np.asarray(b, dtype=float))
     out = np.zeros(len(a), dtype=bool)
     if len(a) == 0:
         return out
+    # canonical direction and absolute sample spacing: the answer for a segment
+    # does not depend on its orientation or on the other segments of the batch
+    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
+    a, b = np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)
     nx_, ny_ = free.shape
     length = np.linalg.norm(b - a, axis=1)
-    n_samples = int(np.ceil(length.max() / step_cells)) + 1 if len(a) else 2
-    s = np.linspace(0.0, 1.0, max(n_samples, 2))
+    n_samples = int(np.ceil(length.max() / step_cells)) + 1
+    k = np.arange(n_samples) * step_cells
     for lo in range(0, len(a), chunk):
-        aa, bb = a[lo : lo + chunk], b[lo : lo + chunk]
-        px = aa[:, 0, None] + s * (bb[:, 0] - aa[:, 0])[:, None]
-        py = aa[:, 1, None] + s * (bb[:, 1] - aa[:, 1])[:, None]
+        aa, bb, ll = a[lo : lo + chunk], b[lo : lo + chunk], length[lo : lo + chunk]
+        frac = np.minimum(k[None, :] / np.maximum(ll, 1e-12)[:, None], 1.0)
+        px = aa[:, 0, None] + frac * (bb[:, 0] - aa[:, 0])[:, None]
+        py = aa[:, 1, None] + frac * (bb[:, 1] - aa[:, 1])[:, None]
         ix = np.floor(px).astype(np.intp)
         iy = np.floor(py).astype(np.intp)
         inside = (ix >= 0) & (ix < nx_) & (iy >= 0) & (iy < ny_)
@@ -74,6 +81,16 @@ class LineOfSightLinks:
             out[close] = segment_free(free, a[close], b[close])
         return out
 
+    def blocked_forever(
+        self, known_occupied: np.ndarray, a: np.ndarray, b: np.ndarray
+    ) -> np.ndarray:
+        """Pairs that no growth of the known map can link: too far or through a known obstacle."""
+        a = np.atleast_2d(np.asarray(a, dtype=float))
+        b = np.atleast_2d(np.asarray(b, dtype=float))
+        far = np.linalg.norm(b - a, axis=1) > self.range_cells
+        hit = ~segment_free(~known_occupied, a, b)
+        return far | hit
+
 
 @LINK_MODELS.register("disk")
 @dataclass
@@ -86,6 +103,12 @@ class DiskLinks:
         a = np.atleast_2d(np.asarray(a, dtype=float))
         b = np.atleast_2d(np.asarray(b, dtype=float))
         return np.linalg.norm(b - a, axis=1) <= self.range_cells
+
+    def blocked_forever(
+        self, known_occupied: np.ndarray, a: np.ndarray, b: np.ndarray
+    ) -> np.ndarray:
+        """Pairs beyond range (obstacles play no role)."""
+        return ~self.linked(known_occupied, a, b)
 
 
 def link_pairs(model: LinkModel, free: np.ndarray, points: np.ndarray) -> np.ndarray:

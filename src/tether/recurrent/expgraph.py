@@ -1,0 +1,241 @@
+"""The exploration graph ``G^t = (V^t, C^t)`` known by the base station.
+
+Recurrent-connectivity paper (Banfi et al., Sec. III and VII): vertices are
+the BS ``b``, the current frontier vertices ``F^t`` (one per sufficiently big
+cluster of frontier cells) and visited locations (reached goals, "candidate
+relay locations for future plans"); each pair carries a geodesic distance
+estimate ``d_ij``; ``C^t`` holds the pairs that the link-detection mechanism
+accepts on the BS's known map.
+
+Vertices sit on centres of traversable coarse cells (see
+:mod:`tether.recurrent.geodesic`); a frontier cluster's vertex is the
+reachable coarse cell within one coarse cell of the cluster that is closest
+to its centroid. The information gain ``g(f)`` is the number of unknown cells
+within sensor range (a square window) of the vertex. Communication edges are
+cached across plans: the known map only grows, so a link once detected stays
+(and, for models that can tell, a pair blocked by a known obstacle stays
+blocked).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import networkx as nx
+import numpy as np
+
+from tether.recurrent.frontiers import FrontierCluster, frontier_clusters
+from tether.recurrent.geodesic import CoarseGrid
+from tether.recurrent.links import LinkModel
+
+__all__ = ["BASE", "FRONTIER", "RELAY", "ExplorationGraph", "GraphBuilder", "window_counts"]
+
+BASE, FRONTIER, RELAY = 0, 1, 2
+
+
+@dataclass
+class ExplorationGraph:
+    """``G^t``: vertex 0 is the BS; ``kind`` is BASE, FRONTIER or RELAY per vertex."""
+
+    positions: np.ndarray  # (V, 2) cell coordinates of vertices
+    nodes: np.ndarray  # (V,) coarse node ids
+    kind: np.ndarray  # (V,) int
+    gain: np.ndarray  # (V,) g(f), 0 for non-frontiers
+    edges: np.ndarray  # (E, 2) communication edges C^t, i < j
+    coarse: CoarseGrid
+
+    @property
+    def n(self) -> int:
+        return len(self.positions)
+
+    @property
+    def frontiers(self) -> np.ndarray:
+        return np.flatnonzero(self.kind == FRONTIER)
+
+    def vertex_of_node(self, node: int) -> int:
+        """Index of the vertex on coarse node ``node`` (``-1`` if none)."""
+        hit = np.flatnonzero(self.nodes == node)
+        return int(hit[0]) if len(hit) else -1
+
+    def geodesic(self, points: np.ndarray) -> np.ndarray:
+        """Geodesic distance estimates (cells) from each point to every vertex, ``(k, V)``."""
+        src = self.coarse.node_at(points)
+        out = np.full((len(src), self.n), np.inf)
+        ok = src >= 0
+        if ok.any():
+            d = self.coarse.distances(src[ok])
+            out[ok] = d[:, self.nodes]
+        return out
+
+    def to_networkx(self) -> nx.Graph:
+        """``G^t`` as an undirected networkx graph on vertex ids ``0..V-1``.
+
+        Node attributes: ``pos``, ``kind`` ("base", "frontier", "relay"), ``gain``.
+        """
+        g = nx.Graph()
+        names = {BASE: "base", FRONTIER: "frontier", RELAY: "relay"}
+        for v in range(self.n):
+            g.add_node(
+                v,
+                pos=tuple(self.positions[v]),
+                kind=names[int(self.kind[v])],
+                gain=float(self.gain[v]),
+            )
+        g.add_edges_from(map(tuple, self.edges.tolist()))
+        return g
+
+
+def window_counts(mask: np.ndarray, points: np.ndarray, half_width: int) -> np.ndarray:
+    """Number of true cells of ``mask`` in the square window of half width around each point."""
+    ii = np.zeros((mask.shape[0] + 1, mask.shape[1] + 1), dtype=np.int64)
+    ii[1:, 1:] = np.cumsum(np.cumsum(mask, axis=0), axis=1)
+    c = np.floor(np.atleast_2d(points)).astype(np.intp)
+    x0 = np.clip(c[:, 0] - half_width, 0, mask.shape[0])
+    x1 = np.clip(c[:, 0] + half_width + 1, 0, mask.shape[0])
+    y0 = np.clip(c[:, 1] - half_width, 0, mask.shape[1])
+    y1 = np.clip(c[:, 1] + half_width + 1, 0, mask.shape[1])
+    return ii[x1, y1] - ii[x0, y1] - ii[x1, y0] + ii[x0, y0]
+
+
+def _snap_cluster(cluster: FrontierCluster, coarse: CoarseGrid, allowed: np.ndarray) -> int:
+    """Allowed coarse node within one coarse cell of the cluster closest to its centroid."""
+    cc = np.unique(cluster.cells // coarse.factor, axis=0)
+    off = np.array([(dx, dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)])
+    cand = np.unique((cc[:, None, :] + off[None]).reshape(-1, 2), axis=0)
+    ok = (
+        (cand[:, 0] >= 0)
+        & (cand[:, 0] < coarse.shape[0])
+        & (cand[:, 1] >= 0)
+        & (cand[:, 1] < coarse.shape[1])
+    )
+    cand = cand[ok]
+    nodes = coarse.node[cand[:, 0], cand[:, 1]]
+    nodes = nodes[nodes >= 0]
+    nodes = nodes[allowed[nodes]]
+    if len(nodes) == 0:
+        return -1
+    d = np.linalg.norm(coarse.centre(nodes) - cluster.centroid, axis=1)
+    return int(nodes[np.argmin(d)])
+
+
+class GraphBuilder:
+    """Builds ``G^t`` from the BS's known map, caching communication edges across plans.
+
+    Parameters
+    ----------
+    occupied
+        True occupancy grid (read only where known).
+    link_model
+        A link model from :data:`tether.registry.LINK_MODELS`.
+    coarse_factor
+        Coarsening of the geodesic grid.
+    gain_half_width
+        Half width (cells) of the window counting unknown cells for ``g(f)``
+        (the sensor range).
+    min_cluster_cells, max_cluster_extent
+        Frontier clustering (see :func:`tether.recurrent.frontiers.cluster_frontiers`).
+    """
+
+    def __init__(
+        self,
+        occupied: np.ndarray,
+        link_model: LinkModel,
+        coarse_factor: int = 3,
+        gain_half_width: int = 50,
+        min_cluster_cells: int = 4,
+        max_cluster_extent: int = 30,
+    ) -> None:
+        self.occupied = np.asarray(occupied, dtype=bool)
+        self.link_model = link_model
+        self.coarse_factor = int(coarse_factor)
+        self.gain_half_width = int(gain_half_width)
+        self.min_cluster_cells = int(min_cluster_cells)
+        self.max_cluster_extent = int(max_cluster_extent)
+        self._linked: set[tuple[int, int]] = set()
+        self._blocked: set[tuple[int, int]] = set()
+
+    def coarse_grid(self, known: np.ndarray) -> CoarseGrid:
+        return CoarseGrid(known & ~self.occupied, self.coarse_factor)
+
+    def build(
+        self,
+        known: np.ndarray,
+        base: np.ndarray,
+        relays: np.ndarray,
+        coarse: CoarseGrid | None = None,
+    ) -> ExplorationGraph:
+        """``G^t`` for the known map ``known``.
+
+        Parameters
+        ----------
+        known
+            BS known-cell mask.
+        base
+            BS position (cell coordinates; must lie on a traversable coarse cell).
+        relays
+            ``(m, 2)`` positions of visited / assigned locations (vertices that
+            are not frontiers unless a frontier snaps onto them).
+        """
+        known = np.asarray(known, dtype=bool)
+        coarse = coarse if coarse is not None else self.coarse_grid(known)
+        base_node = int(coarse.node_at(base)[0])
+        if base_node < 0:
+            raise ValueError("the base station is not on a traversable known cell")
+        comp = coarse.components
+        allowed = comp == comp[base_node]
+        relay_nodes = coarse.node_at(np.asarray(relays, dtype=float).reshape(-1, 2))
+        relay_nodes = relay_nodes[(relay_nodes >= 0) & (relay_nodes != base_node)]
+        relay_nodes = list(dict.fromkeys(relay_nodes.tolist()))
+        nodes = [base_node, *relay_nodes]
+        kind = [BASE] + [RELAY] * len(relay_nodes)
+        index = {nd: i for i, nd in enumerate(nodes)}
+        for cluster in frontier_clusters(
+            known, self.occupied, self.min_cluster_cells, self.max_cluster_extent
+        ):
+            nd = _snap_cluster(cluster, coarse, allowed)
+            if nd < 0 or nd == base_node:
+                continue
+            if nd in index:
+                kind[index[nd]] = FRONTIER
+            else:
+                index[nd] = len(nodes)
+                nodes.append(nd)
+                kind.append(FRONTIER)
+        nodes_arr = np.asarray(nodes, dtype=np.intp)
+        kind_arr = np.asarray(kind, dtype=np.int8)
+        positions = coarse.centre(nodes_arr)
+        gain = np.zeros(len(nodes_arr))
+        fr = kind_arr == FRONTIER
+        if fr.any():
+            gain[fr] = window_counts(~known, positions[fr], self.gain_half_width)
+        cells = coarse.cells[nodes_arr]
+        edges = self._edges(known, cells[:, 0] * (coarse.shape[1] + 1) + cells[:, 1], positions)
+        return ExplorationGraph(positions, nodes_arr, kind_arr, gain, edges, coarse)
+
+    def _edges(self, known: np.ndarray, keys_: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        # keys_ are coarse *cell* keys (stable while the known map grows; node ids are not)
+        nodes = keys_
+        i, j = np.triu_indices(len(nodes), k=1)
+        if len(i) == 0:
+            return np.empty((0, 2), dtype=np.intp)
+        close = np.linalg.norm(positions[i] - positions[j], axis=1) <= self.link_model.range_cells
+        i, j = i[close], j[close]
+        lo = np.minimum(nodes[i], nodes[j])
+        hi = np.maximum(nodes[i], nodes[j])
+        keys = list(zip(lo.tolist(), hi.tolist(), strict=True))
+        linked = np.array([k in self._linked for k in keys], dtype=bool)
+        blocked = np.array([k in self._blocked for k in keys], dtype=bool)
+        todo = np.flatnonzero(~linked & ~blocked)
+        if len(todo):
+            free = known & ~self.occupied
+            ok = self.link_model.linked(free, positions[i[todo]], positions[j[todo]])
+            linked[todo] = ok
+            for t in todo[ok]:
+                self._linked.add(keys[t])
+            never = getattr(self.link_model, "blocked_forever", None)
+            rest = todo[~ok]
+            if never is not None and len(rest):
+                hard = never(known & self.occupied, positions[i[rest]], positions[j[rest]])
+                for t in rest[hard]:
+                    self._blocked.add(keys[t])
+        return np.stack([i[linked], j[linked]], axis=1)

@@ -1,0 +1,377 @@
+"""Grid exploration simulator for the recurrent-connectivity paper.
+
+Recurrent-connectivity paper (Banfi et al., Sec. VII-A; MRESim-like): ``m``
+robots with a depth sensor explore a 2-D occupancy map from a base station
+(BS). Each step:
+
+1. robots advance ``speed_cells`` along their paths (paths run through known
+   free space, so they are always valid);
+2. moving robots sense a 60 degree fan along their heading; a robot that
+   reaches a frontier goal takes a complete rotation (360 degrees);
+3. communication links among the BS and the robots are evaluated with the
+   link model on the *true* map (the planner's ``C^t`` uses the same model on
+   the BS's *known* map, which is conservative); robots in one component
+   exchange maps, and a component holding the BS flushes everything it knows
+   to the BS (data gathered while disconnected is delivered on reconnection);
+4. the strategy (the BS planner of :mod:`tether.recurrent.replanning` or the
+   Utility baseline of :mod:`tether.recurrent.baseline_utility`) reacts;
+5. metrics: fraction of the free area known at the BS, robots out of
+   communication with the BS.
+
+Positions are continuous cell coordinates (cell ``(ix, iy)`` covers
+``[ix, ix+1) x [iy, iy+1)``); one step is one second.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+import scipy.sparse as sp
+from scipy import ndimage
+from scipy.sparse.csgraph import connected_components
+
+from tether.recurrent.geodesic import CoarseGrid
+from tether.recurrent.knowledge import Knowledge
+from tether.recurrent.links import LinkModel, link_pairs
+from tether.recurrent.sensor import DepthSensor
+from tether.registry import LINK_MODELS
+
+__all__ = [
+    "ExplorationConfig",
+    "ExplorationResult",
+    "ExplorationSim",
+    "GoalKind",
+    "Strategy",
+    "run_exploration",
+]
+
+
+class GoalKind:
+    """What a robot's goal is (ints so they fit in arrays)."""
+
+    NONE = 0  # no goal (idle where it stands)
+    RELAY = 1  # a non-frontier vertex of a configuration
+    FRONTIER = 2  # a frontier: take a full scan on arrival
+    FAKE = 3  # a "fake" frontier (Sec. V): a leftover robot next to the configuration
+    HOME = 4  # Utility baseline: heading back towards the BS
+
+
+@dataclass
+class ExplorationConfig:
+    """Physical parameters of an exploration run (paper defaults, Sec. VII-A)."""
+
+    n_robots: int = 12
+    steps: int = 900
+    speed_cells: float = 4.0
+    fov_deg: float = 60.0
+    sensor_range_cells: float = 50.0
+    sensor_resolution_deg: float = 1.0
+    link_model: str = "los"
+    link_params: dict[str, Any] = field(default_factory=lambda: {"range_cells": 150.0})
+    coarse_factor: int = 3
+    min_cluster_cells: int = 4
+    max_cluster_extent: int = 30
+    scan_steps: int = 1  # steps a full rotation takes
+
+
+class Strategy(Protocol):
+    """Decision-making plugged into :class:`ExplorationSim` (called once per step)."""
+
+    name: str
+
+    def start(self, sim: ExplorationSim) -> None: ...
+
+    def update(self, sim: ExplorationSim) -> None: ...
+
+    def metrics(self) -> dict[str, Any]: ...
+
+
+@dataclass
+class ExplorationResult:
+    """Time series and events of a run (see :meth:`ExplorationSim.result`)."""
+
+    explored: np.ndarray  # (T+1,) fraction of free area known at the BS, step 0..T
+    connected: np.ndarray  # (T+1, n) robot linked (multi-hop) to the BS
+    positions: np.ndarray  # (T+1, n, 2)
+    events: list[dict[str, Any]]
+    metrics: dict[str, Any]
+    wall_time_s: float
+    timing_s: dict[str, float]
+
+
+def _reachable_free(occupied: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """True free cells 8-connected to ``start`` (the area the team could ever explore)."""
+    lab, _ = ndimage.label(~occupied, structure=np.ones((3, 3), bool))
+    c = np.floor(start).astype(int)
+    return lab == lab[c[0], c[1]]
+
+
+def random_base(occupied: np.ndarray, coarse_factor: int, rng: np.random.Generator) -> np.ndarray:
+    """A random BS position on a traversable coarse cell of the largest free region."""
+    cg = CoarseGrid(~occupied, coarse_factor)
+    comp = cg.components
+    big = np.argmax(np.bincount(comp))
+    cand = np.flatnonzero(comp == big)
+    return cg.centre(int(rng.choice(cand)))[0]
+
+
+class ExplorationSim:
+    """State of an exploration run; strategies read and command it.
+
+    Parameters
+    ----------
+    occupied
+        True map ``(nx, ny)``.
+    base
+        BS position (cell coordinates); snapped to the nearest traversable
+        coarse cell centre.
+    strategy
+        The decision-making (:class:`Strategy`).
+    config
+        Physical parameters.
+    """
+
+    def __init__(
+        self,
+        occupied: np.ndarray,
+        base: np.ndarray,
+        strategy: Strategy,
+        config: ExplorationConfig | None = None,
+    ) -> None:
+        self.cfg = config or ExplorationConfig()
+        self.occupied = np.asarray(occupied, dtype=bool)
+        self.shape = self.occupied.shape
+        self.strategy = strategy
+        self.sensor = DepthSensor(
+            self.cfg.fov_deg, self.cfg.sensor_range_cells, self.cfg.sensor_resolution_deg
+        )
+        self.link: LinkModel = LINK_MODELS.get(self.cfg.link_model)(**self.cfg.link_params)
+        true_coarse = CoarseGrid(~self.occupied, self.cfg.coarse_factor)
+        bnode = true_coarse.nearest_node(np.asarray(base, float))
+        if bnode < 0:
+            raise ValueError("the map has no traversable cell for the base station")
+        self.base = true_coarse.centre(bnode)[0]
+        self.free_region = _reachable_free(self.occupied, self.base)
+        self.free_total = int(self.free_region.sum())
+        n = self.cfg.n_robots
+        self.n = n
+        # start on the n traversable coarse cells closest (geodesically) to the BS
+        d = true_coarse.distances([bnode])[0]
+        order = np.argsort(d, kind="stable")
+        order = order[np.isfinite(d[order])][:n]
+        starts = true_coarse.centre(order)
+        if len(starts) < n:
+            starts = np.vstack([starts, np.repeat(starts[:1], n - len(starts), axis=0)])
+        self.pos = starts.astype(float)
+        self.heading = np.zeros(n)
+        self.paths: list[np.ndarray] = [self.pos[i : i + 1].copy() for i in range(n)]
+        self.path_idx = np.zeros(n, dtype=int)
+        self.goal = self.pos.copy()
+        self.goal_kind = np.full(n, GoalKind.NONE, dtype=int)
+        self.at_goal = np.ones(n, dtype=bool)
+        self.scanned = np.ones(n, dtype=bool)
+        self.delivered = np.ones(n, dtype=bool)
+        self.wait_until = np.zeros(n, dtype=int)  # no motion before this step
+        self.scan_left = np.zeros(n, dtype=int)
+        self.knowledge = Knowledge(self.shape, n)
+        self.connected = np.ones(n, dtype=bool)
+        self.groups: list[list[int]] = [list(range(n))]
+        self.t = 0
+        self.events: list[dict[str, Any]] = []
+        self.timing = {"move": 0.0, "sense": 0.0, "comm": 0.0, "strategy": 0.0, "metrics": 0.0}
+        # initial full scans at the start positions, shared with the BS
+        for r, cells in enumerate(self.sensor.scan(self.occupied, self.pos, self.heading, True)):
+            self.knowledge.observe(r, cells)
+        self._communicate()
+        self._explored: list[float] = []
+        self._connected_hist: list[np.ndarray] = []
+        self._pos_hist: list[np.ndarray] = []
+        self._record()
+
+    # ------------------------------------------------------------------ commands
+    def assign(
+        self, robot: int, goal: np.ndarray, kind: int, path: np.ndarray, delay: int = 0
+    ) -> None:
+        """Send ``robot`` along ``path`` (``(k, 2)`` waypoints ending at ``goal``)."""
+        path = np.atleast_2d(np.asarray(path, dtype=float))
+        if len(path) == 0:
+            path = self.pos[robot : robot + 1].copy()
+        self.paths[robot] = path
+        self.path_idx[robot] = 0
+        self.goal[robot] = np.asarray(goal, dtype=float)
+        self.goal_kind[robot] = kind
+        arrived = bool(np.allclose(self.pos[robot], self.goal[robot]))
+        self.at_goal[robot] = arrived
+        self.scanned[robot] = kind != GoalKind.FRONTIER
+        self.delivered[robot] = False
+        self.scan_left[robot] = (
+            self.cfg.scan_steps if (arrived and kind == GoalKind.FRONTIER) else 0
+        )
+        self.wait_until[robot] = self.t + int(delay)
+
+    def stop(self, robot: int) -> None:
+        """Stop where the robot stands (its position becomes its goal)."""
+        self.assign(robot, self.pos[robot].copy(), GoalKind.NONE, self.pos[robot : robot + 1])
+        self.at_goal[robot] = True
+
+    def known_by_bs(self) -> np.ndarray:
+        return self.knowledge.global_known
+
+    def coarse_known(self, known: np.ndarray | None = None) -> CoarseGrid:
+        """Coarse geodesic grid of a known map (default: the BS's)."""
+        k = self.knowledge.global_known if known is None else known
+        return CoarseGrid(k & ~self.occupied, self.cfg.coarse_factor)
+
+    def remaining_distance(self, robot: int) -> float:
+        """Length (cells) of the rest of the robot's path."""
+        path = self.paths[robot]
+        k = self.path_idx[robot]
+        if k >= len(path):
+            return 0.0
+        d = np.linalg.norm(path[k] - self.pos[robot])
+        if k + 1 < len(path):
+            d += np.linalg.norm(np.diff(path[k:], axis=0), axis=1).sum()
+        return float(d)
+
+    def log(self, kind: str, **data: Any) -> None:
+        self.events.append({"step": self.t, "kind": kind, **data})
+
+    # ------------------------------------------------------------------ stepping
+    def _move(self) -> np.ndarray:
+        """Advance robots along their paths; returns the mask of robots that moved."""
+        moved = np.zeros(self.n, dtype=bool)
+        speed = self.cfg.speed_cells
+        for r in range(self.n):
+            if self.at_goal[r] or self.t < self.wait_until[r]:
+                continue
+            path = self.paths[r]
+            budget = speed
+            p = self.pos[r]
+            k = self.path_idx[r]
+            while budget > 1e-9 and k < len(path):
+                seg = path[k] - p
+                L = float(np.hypot(seg[0], seg[1]))
+                if budget >= L:
+                    p = path[k].copy()
+                    budget -= L
+                    k += 1
+                else:
+                    p = p + seg * (budget / L)
+                    budget = 0.0
+                if L > 1e-9:
+                    self.heading[r] = np.arctan2(seg[1], seg[0])
+            moved[r] = True
+            self.pos[r] = p
+            self.path_idx[r] = k
+            if k >= len(path):
+                self.pos[r] = path[-1]
+                self.at_goal[r] = True
+                if self.goal_kind[r] == GoalKind.FRONTIER:
+                    self.scan_left[r] = self.cfg.scan_steps
+        return moved
+
+    def _sense(self, moved: np.ndarray) -> None:
+        scanning = self.scan_left > 0
+        who = np.flatnonzero(moved | scanning)
+        if len(who) == 0:
+            return
+        full = scanning[who]
+        seen = self.sensor.scan(self.occupied, self.pos[who], self.heading[who], full)
+        for r, cells in zip(who, seen, strict=True):
+            self.knowledge.observe(int(r), cells)
+        self.scan_left[scanning] -= 1
+        done = scanning & (self.scan_left == 0)
+        self.scanned[done] = True
+
+    def _communicate(self) -> None:
+        nodes = np.vstack([self.base[None], self.pos])
+        pairs = link_pairs(self.link, ~self.occupied, nodes)
+        m = len(nodes)
+        adj = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
+        _, lab = connected_components(adj, directed=False)
+        self.connected = lab[1:] == lab[0]
+        groups: dict[int, list[int]] = {}
+        for r in range(self.n):
+            groups.setdefault(int(lab[r + 1]), []).append(r)
+        keys = sorted(groups)
+        self.groups = [groups[k] for k in keys]
+        self.knowledge.exchange(self.groups, [k == lab[0] for k in keys])
+        self.links = pairs
+        # a robot's data is at the BS once it finished at its goal while connected
+        self.delivered |= self.connected & self.at_goal & self.scanned
+
+    def _record(self) -> None:
+        known = self.knowledge.global_known
+        self._explored.append(np.count_nonzero(known & self.free_region) / self.free_total)
+        self._connected_hist.append(self.connected.copy())
+        self._pos_hist.append(self.pos.copy())
+
+    def step(self) -> None:
+        """Advance the simulation by one step."""
+        self.t += 1
+        tic = time.perf_counter()
+        moved = self._move()
+        t1 = time.perf_counter()
+        self._sense(moved)
+        t2 = time.perf_counter()
+        self._communicate()
+        t3 = time.perf_counter()
+        self.strategy.update(self)
+        t4 = time.perf_counter()
+        self._record()
+        t5 = time.perf_counter()
+        for key, dt in zip(
+            ("move", "sense", "comm", "strategy", "metrics"),
+            (t1 - tic, t2 - t1, t3 - t2, t4 - t3, t5 - t4),
+            strict=True,
+        ):
+            self.timing[key] += dt
+
+    def result(self, wall_time_s: float) -> ExplorationResult:
+        conn = np.asarray(self._connected_hist)
+        return ExplorationResult(
+            explored=np.asarray(self._explored),
+            connected=conn,
+            positions=np.asarray(self._pos_hist),
+            events=list(self.events),
+            metrics=self.strategy.metrics(),
+            wall_time_s=wall_time_s,
+            timing_s=dict(self.timing),
+        )
+
+
+def run_exploration(
+    occupied: np.ndarray,
+    strategy: Strategy,
+    config: ExplorationConfig | None = None,
+    base: np.ndarray | None = None,
+    rng: np.random.Generator | None = None,
+) -> ExplorationResult:
+    """Run one exploration mission and return its time series.
+
+    Parameters
+    ----------
+    occupied
+        True map ``(nx, ny)`` boolean.
+    strategy
+        A :class:`Strategy` (e.g. ``RecurrentStrategy`` or ``UtilityStrategy``).
+    config
+        Physical parameters (paper defaults).
+    base
+        BS position; random (from ``rng``) on the largest free region if omitted.
+    rng
+        Random generator for the BS position.
+    """
+    cfg = config or ExplorationConfig()
+    occupied = np.asarray(occupied, dtype=bool)
+    if base is None:
+        base = random_base(occupied, cfg.coarse_factor, rng or np.random.default_rng(0))
+    tic = time.perf_counter()
+    sim = ExplorationSim(occupied, base, strategy, cfg)
+    strategy.start(sim)
+    for _ in range(cfg.steps):
+        sim.step()
+    return sim.result(time.perf_counter() - tic)

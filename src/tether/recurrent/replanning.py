@@ -1,0 +1,311 @@
+"""The BS planner: asynchronous replanning under recurrent connectivity.
+
+Recurrent-connectivity paper (Banfi et al., Sec. III-VI). Every step the BS
+updates readiness (Sec. VI); as soon as at least ``theta`` robots are ready it
+plans for them:
+
+1. builds ``G^t`` from its known map (:mod:`tether.recurrent.expgraph`);
+2. utilities of frontiers, eq. (1): ``U(f) = g(f) / min_{j in R^t} d(p_j, f)^2``;
+3. the optimal configuration (Sec. IV, ``method="apx"`` Algorithm 1 or
+   ``"ilp"``) with the non-ready robots' goals as fixed relays;
+4. the deployment (Sec. V): Hungarian assignment of the ready and the
+   connected non-ready robots, surplus robots to "fake" frontiers;
+5. the relay paths ``P_f`` of the plan's frontiers bind robots until the
+   frontier data reaches the BS (Sec. VI).
+
+Recovery (Sec. VII-B): a robot that cannot reach its goal aborts; all robots
+of the branches it belongs to (those bound with it by some ``P_f``) are
+preempted, stop where they are and become ready for a new plan.
+
+A failed attempt (no frontier reachable within the budget) is retried when
+the ready set changes, or after ``retry_steps`` steps if the BS map grew.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from tether.recurrent.configuration import check_configuration, optimal_configuration
+from tether.recurrent.expgraph import FRONTIER, ExplorationGraph, GraphBuilder
+from tether.recurrent.exploration import ExplorationSim, GoalKind
+from tether.recurrent.readiness import ReadinessTracker, relay_paths
+
+__all__ = ["RecurrentStrategy", "frontier_utilities"]
+
+
+def frontier_utilities(
+    graph: ExplorationGraph, dist: np.ndarray, exclude: set[int] = frozenset()
+) -> dict[int, float]:
+    """Eq. (1): ``U(f) = g(f) / min_j d(p_j, f)^2`` for reachable frontiers.
+
+    ``dist`` is ``(k, V)``: geodesic distances from the ready robots' positions
+    to the vertices. Distances below one cell count as one cell.
+    """
+    out: dict[int, float] = {}
+    if dist.shape[0] == 0:
+        return out
+    dmin = dist.min(axis=0)
+    for f in graph.frontiers.tolist():
+        if f in exclude or not np.isfinite(dmin[f]) or graph.gain[f] <= 0:
+            continue
+        out[f] = float(graph.gain[f] / max(dmin[f], 1.0) ** 2)
+    return out
+
+
+@dataclass
+class RecurrentStrategy:
+    """The paper's centralized asynchronous strategy (``theta``, APX/ILP, ``delta``).
+
+    Parameters
+    ----------
+    theta
+        Replan when at least ``theta`` robots are ready (capped at the team size).
+    method, delta, backend
+        Configuration solver (see :func:`optimal_configuration`).
+    count_planning_time
+        If true, newly assigned robots wait ``ceil(planning time / 1 s)`` steps
+        (the paper's Fig. 4a); otherwise planning is instantaneous (Fig. 4b).
+    check
+        Run :func:`check_configuration` on every plan and record violations.
+    retry_steps
+        Minimum steps between two failed attempts with the same ready set.
+    time_limit_s
+        ILP time limit per plan.
+    """
+
+    theta: int = 1
+    method: str = "apx"
+    delta: int = 4
+    backend: str = "highs"
+    count_planning_time: bool = False
+    check: bool = False
+    retry_steps: int = 10
+    time_limit_s: float | None = 60.0
+    name: str = "recurrent"
+    plans: list[dict[str, Any]] = field(default_factory=list)
+    violations: list[str] = field(default_factory=list)
+
+    # ------------------------------------------------------------------ protocol
+    def start(self, sim: ExplorationSim) -> None:
+        cfg = sim.cfg
+        self.builder = GraphBuilder(
+            sim.occupied,
+            sim.link,
+            cfg.coarse_factor,
+            int(round(cfg.sensor_range_cells)),
+            cfg.min_cluster_cells,
+            cfg.max_cluster_extent,
+        )
+        self.tracker = ReadinessTracker()
+        self.visited: dict[int, np.ndarray] = {}  # coarse cell key -> position
+        self._last_attempt: tuple[frozenset[int], int, int] | None = None
+        self.finished = False
+        self.blocked = np.zeros(sim.n, dtype=bool)
+
+    def metrics(self) -> dict[str, Any]:
+        times = [p["planning_time_s"] for p in self.plans if p["issued"]]
+        return {
+            "plans": int(sum(p["issued"] for p in self.plans)),
+            "plan_attempts": len(self.plans),
+            "planning_time_mean_s": float(np.mean(times)) if times else 0.0,
+            "planning_time_max_s": float(np.max(times)) if times else 0.0,
+            "planning_time_total_s": float(np.sum(times)) if times else 0.0,
+            "constraint_violations": len(self.violations),
+            "exploration_finished": self.finished,
+        }
+
+    def goal_keys(self, sim: ExplorationSim) -> np.ndarray:
+        """Coarse node of every robot's goal (location keys for readiness)."""
+        f = sim.cfg.coarse_factor
+        c = np.floor(sim.goal / f).astype(np.intp)
+        return c[:, 0] * (sim.shape[1] // f + 1) + c[:, 1]
+
+    def update(self, sim: ExplorationSim) -> None:
+        for r in np.flatnonzero(self.blocked):
+            self.abort(sim, int(r))
+        self.blocked[:] = False
+        keys = self.goal_keys(sim)
+        self.tracker.update(keys, sim.at_goal, sim.delivered)
+        done = sim.at_goal & sim.scanned
+        ready = self.tracker.ready(done, sim.connected, keys)
+        n_ready = int(ready.sum())
+        if n_ready < min(self.theta, sim.n) or n_ready == 0:
+            return
+        ready_set = frozenset(np.flatnonzero(ready).tolist())
+        version = sim.knowledge.global_version
+        last = self._last_attempt
+        same = last is not None and last[0] == ready_set
+        if same and (last[1] == version or sim.t - last[2] < self.retry_steps):
+            return
+        self._last_attempt = (ready_set, version, sim.t)
+        self.plan(sim, ready)
+
+    # ------------------------------------------------------------------ recovery
+    def abort(self, sim: ExplorationSim, robot: int) -> None:
+        """Recovery rule: ``robot`` cannot reach its goal; preempt its branches."""
+        keys = self.goal_keys(sim)
+        branch = sorted(self.tracker.branch(robot, keys))
+        self.tracker.drop({int(keys[r]) for r in branch})
+        for r in branch:
+            sim.stop(r)
+        sim.log("abort", robot=robot, preempted=branch)
+
+    # ------------------------------------------------------------------ planning
+    def plan(self, sim: ExplorationSim, ready: np.ndarray) -> None:
+        tic = time.perf_counter()
+        coarse = sim.coarse_known()
+        keys = self.goal_keys(sim)
+        for r in range(sim.n):  # robots stand on (or head to) vertices
+            self.visited.setdefault(int(keys[r]), sim.goal[r].copy())
+        relays = np.array(list(self.visited.values())).reshape(-1, 2)
+        graph = self.builder.build(sim.knowledge.global_known, sim.base, relays, coarse)
+        goal_v = np.array([graph.vertex_of_node(int(coarse.node_at(g)[0])) for g in sim.goal])
+        ready_ids = np.flatnonzero(ready)
+        nonready = np.flatnonzero(~ready)
+        fixed = {int(goal_v[r]) for r in nonready if goal_v[r] > 0}
+        movable = np.flatnonzero(ready | sim.connected)  # constraint (IV)
+        dist, pred = self._distances(graph, sim.pos[movable])
+        row = {int(r): k for k, r in enumerate(movable)}
+        ready_rows = [row[int(r)] for r in ready_ids]
+        utilities = frontier_utilities(graph, dist[ready_rows], exclude=fixed)
+        nxg = graph.to_networkx()
+        record: dict[str, Any] = {
+            "step": sim.t,
+            "n_ready": len(ready_ids),
+            "n_vertices": graph.n,
+            "n_edges": len(graph.edges),
+            "n_frontiers": len(utilities),
+            "issued": False,
+        }
+        if not utilities:
+            if len(ready_ids) == sim.n and len(graph.frontiers) == 0:
+                self.finished = True
+            record.update(planning_time_s=time.perf_counter() - tic, utility=0.0, size=0)
+            self.plans.append(record)
+            sim.log("plan", **record)
+            return
+        conf = optimal_configuration(
+            nxg,
+            0,
+            utilities,
+            len(ready_ids),
+            method=self.method,
+            delta=self.delta,
+            fixed=fixed,
+            backend=self.backend,
+            time_limit_s=self.time_limit_s,
+        )
+        if not conf.vertices & set(utilities):
+            record.update(planning_time_s=time.perf_counter() - tic, utility=0.0, size=0)
+            self.plans.append(record)
+            sim.log("plan", **record)
+            return
+        assignment, fake = self._deploy(
+            sim, graph, nxg, conf, ready_ids, movable, goal_v, dist, row
+        )
+        planning_time = time.perf_counter() - tic
+        if self.check:
+            previous = {int(r): int(goal_v[r]) for r in range(sim.n)}
+            problems = check_configuration(
+                nxg,
+                0,
+                conf.vertices,
+                utilities.keys(),
+                len(ready_ids),
+                fixed=fixed,
+                assignment=assignment,
+                previous_goals=previous,
+                ready=ready_ids.tolist(),
+                connected=[int(r) for r in movable if not ready[r]],
+            )
+            self.violations.extend(f"step {sim.t}: {p}" for p in problems)
+        delay = math.ceil(planning_time) if self.count_planning_time else 0
+        for r, v in assignment.items():
+            if goal_v[r] == v and not ready[r]:
+                continue  # non-ready robot keeps its goal
+            kind = (
+                GoalKind.FAKE
+                if v in fake
+                else GoalKind.FRONTIER
+                if graph.kind[v] == FRONTIER
+                else GoalKind.RELAY
+            )
+            k = row[r]
+            path = graph.coarse.path(pred[k], int(graph.nodes[v]))
+            path = np.vstack([sim.pos[r : r + 1], path])
+            sim.assign(r, graph.positions[v], kind, path, delay=delay)
+        self._bind(sim, graph, assignment, fake, coarse)
+        record.update(
+            issued=True,
+            planning_time_s=planning_time,
+            solver_time_s=conf.solve_time_s,
+            utility=conf.utility,
+            size=len(conf.vertices),
+            n_fake=len(fake),
+            n_assigned=len(assignment),
+            method=conf.method,
+            proven_optimal=conf.proven_optimal,
+        )
+        self.plans.append(record)
+        sim.log("plan", **record)
+
+    @staticmethod
+    def _distances(graph: ExplorationGraph, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        src = graph.coarse.node_at(points)
+        if (src < 0).any():
+            raise RuntimeError("a robot stands outside the known traversable space")
+        d, pred = graph.coarse.distances(src, predecessors=True)
+        return d[:, graph.nodes], pred
+
+    def _deploy(
+        self,
+        sim: ExplorationSim,
+        graph: ExplorationGraph,
+        nxg: Any,
+        conf: Any,
+        ready_ids: np.ndarray,
+        movable: np.ndarray,
+        goal_v: np.ndarray,
+        dist: np.ndarray,
+        row: dict[int, int],
+    ) -> tuple[dict[int, int], set[int]]:
+        """Sec. V deployment via :mod:`tether.recurrent.deployment`."""
+        from tether.recurrent.deployment import deploy
+
+        cost = {int(r): {v: float(dist[row[int(r)], v]) for v in range(graph.n)} for r in movable}
+        ready_set = {int(r) for r in ready_ids}
+        previous = {int(r): int(goal_v[r]) for r in movable if int(r) not in ready_set}
+        out = deploy(nxg, 0, conf.vertices, sorted(ready_set), previous, cost)
+        return dict(out.assignment), set(out.fake)
+
+    def _bind(
+        self,
+        sim: ExplorationSim,
+        graph: ExplorationGraph,
+        assignment: dict[int, int],
+        fake: set[int],
+        coarse: Any,
+    ) -> None:
+        """Relay paths ``P_f`` of the plan's (real and fake) frontiers (Sec. VI)."""
+        goals: dict[int, int] = {}
+        times: dict[int, float] = {}
+        for r in range(sim.n):
+            v = graph.vertex_of_node(int(coarse.node_at(sim.goal[r])[0]))
+            if v < 0 or v in goals.values():
+                continue
+            goals[r] = v
+            scan = sim.cfg.scan_steps if sim.goal_kind[r] == GoalKind.FRONTIER else 0
+            wait = max(sim.wait_until[r] - sim.t, 0)
+            times[r] = wait + sim.remaining_distance(r) / sim.cfg.speed_cells + scan
+        targets = [r for r in assignment if r in goals]
+        paths = relay_paths(goals, times, targets, graph.edges, base=0)
+        keys = self.goal_keys(sim)
+        for f, members in paths.items():
+            if members is None:
+                continue
+            self.tracker.add(int(keys[f]), [int(keys[m]) for m in members], plan=len(self.plans))
