@@ -193,3 +193,24 @@ def test_robot_step_depends_only_on_what_it_senses():
             np.testing.assert_allclose(steps_of(moved)[i], base[i], atol=1e-12)
             checked += 1
     assert checked > 10
+
+
+@pytest.mark.parametrize("seed", range(100))
+def test_direction_search_is_feasible_and_never_worse(seed):
+    """The candidate search keeps (1)-(2) for true positions and beats shrink-only progress."""
+    rng = np.random.default_rng(1000 + seed)
+    dim = 2 + seed % 2
+    n = 8
+    pos = rng.uniform(-12, 12, (n, dim))
+    sensor = SensorModel(D_MAX, radial_error_m=DR, angular_error_rad=DTHETA, noise="bound")
+    obs = sense(pos, sensor, rng)
+    observer = obs.observer()
+    desired = rng.normal(size=(n, dim)) * 3.0
+    kwargs = dict(d_max_m=D_MAX, radial_error_m=DR, angular_error_rad=DTHETA)
+    plain = constrained_steps(desired, obs.measured, observer, **kwargs)
+    search = constrained_steps(desired, obs.measured, observer, search_directions=True, **kwargs)
+    for i in range(n):
+        rows = slice(obs.indptr[i], obs.indptr[i + 1])
+        assert satisfies_constraints(search[i], obs.true_relative[rows], d_max_m=D_MAX)
+        assert search[i] @ desired[i] >= plain[i] @ desired[i] - 1e-9
+        assert np.linalg.norm(search[i]) <= np.linalg.norm(desired[i]) + 1e-9

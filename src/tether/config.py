@@ -61,13 +61,16 @@ class InitConfig(_Strict):
     ``random_connected``: robots added one by one, each within ``spacing_m`` of
     a random earlier robot (and at least ``min_separation_m`` from all), inside
     free space around ``center``. ``grid``: a square/cubic lattice of pitch
-    ``spacing_m``. ``positions``: explicit ``(n, dim)`` list.
+    ``spacing_m``. ``uniform``: uniformly at random in a box of side lengths
+    ``extent_m`` around ``center``, redrawn until the sensing graph is connected
+    and robots are ``min_separation_m`` apart. ``positions``: explicit ``(n, dim)`` list.
     """
 
-    kind: Literal["random_connected", "grid", "positions"] = "random_connected"
+    kind: Literal["random_connected", "uniform", "grid", "positions"] = "random_connected"
     spacing_m: float = Field(default=5.0, gt=0)
     min_separation_m: float = Field(default=1.0, ge=0)
     center: list[float] | None = None
+    extent_m: list[float] | None = None
     positions: list[list[float]] | None = None
 
 

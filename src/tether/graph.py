@@ -39,6 +39,20 @@ def pairs_within(positions: np.ndarray, range_m: float) -> np.ndarray:
     return pairs[order]
 
 
+def expand_rows(indptr: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pair every entry of ``rows`` with every entry of that row of a CSR structure.
+
+    Returns ``(which, entry)``: for each ``r = rows[q]`` and each ``e`` in
+    ``indptr[r]:indptr[r + 1]``, one element ``which = q`` and ``entry = e``.
+    Vectorised, ``O(sum of row lengths)``; used to scan neighbours of neighbours.
+    """
+    rows = np.asarray(rows, dtype=np.intp)
+    counts = indptr[rows + 1] - indptr[rows]
+    which = np.repeat(np.arange(len(rows)), counts)
+    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    return which, np.repeat(indptr[rows], counts) + offsets
+
+
 def adjacency(n: int, pairs: np.ndarray, weights: np.ndarray | None = None) -> sp.csr_matrix:
     """Symmetric sparse adjacency matrix of an undirected (weighted) graph."""
     pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)

@@ -50,7 +50,7 @@ class RunOutcome:
 
 def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
     """The scenario's world from the scene registry (``free``, ``map``, ``town``, ...)."""
-    import tether.world.scenes  # noqa: F401  (registers the scenes)
+    from tether.world.scenes import make_scene
 
     src, cfg = scenario.source, scenario.world
     if cfg.scene not in SCENES:
@@ -65,10 +65,8 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
         if key in params:
             params[key] = str(scenario.resolve_path(params[key]))
     try:
-        world = SCENES.get(cfg.scene)(rng, **params)
-    except MapError as exc:
-        raise ScenarioError(f"{src}: world.params: {exc}") from None
-    except TypeError as exc:
+        world = make_scene(cfg.scene, rng, **params)
+    except (MapError, ScenarioError) as exc:
         raise ScenarioError(f"{src}: world.params: {exc}") from None
     if world.dim != cfg.dim:
         raise ScenarioError(
@@ -117,7 +115,9 @@ def build(scenario: Scenario, seed: int | None = None) -> Built:
     world = build_world(scenario, rng)
     sensor = make_sensor(scenario)
     try:
-        positions = initial_positions(scenario.team.init, scenario.team.n_robots, world, rng)
+        positions = initial_positions(
+            scenario.team.init, scenario.team.n_robots, world, rng, scenario.sensing.range_m
+        )
     except ValueError as exc:
         raise ScenarioError(f"{scenario.source}: team.init: {exc}") from None
     bad = ~world.points_free(positions)

@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 
 from tether.geometry import random_perpendicular, unit
-from tether.graph import pairs_within
+from tether.graph import expand_rows, pairs_within
 from tether.world.world import World
 
 NoiseKind = Literal["none", "uniform", "bound"]
@@ -104,11 +104,8 @@ def _occluded(positions: np.ndarray, pairs: np.ndarray, body_radius_m: float) ->
     nbr = both[order, 1]
     indptr = np.concatenate([[0], np.cumsum(np.bincount(both[:, 0], minlength=n))])
     i, k = pairs[:, 0], pairs[:, 1]
-    counts = indptr[i + 1] - indptr[i]
-    pair_idx = np.repeat(np.arange(m), counts)
-    starts = np.repeat(indptr[i], counts)
-    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    j = nbr[starts + offsets]
+    pair_idx, entry = expand_rows(indptr, i)
+    j = nbr[entry]
     pi, pk = i[pair_idx], k[pair_idx]
     keep = j != pk
     pair_idx, j, pi, pk = pair_idx[keep], j[keep], pi[keep], pk[keep]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from tether.config import InitConfig
+from tether.graph import is_connected, pairs_within
 from tether.world.world import World
 
 
@@ -57,6 +58,33 @@ def random_connected(
     return np.asarray(pos)
 
 
+def uniform_connected(
+    n: int,
+    world: World,
+    rng: np.random.Generator,
+    extent_m: np.ndarray,
+    range_m: float,
+    min_separation_m: float = 0.0,
+    center: np.ndarray | None = None,
+    max_tries: int = 2000,
+) -> np.ndarray:
+    """``n`` robots uniform in a box, redrawn until connected within ``range_m``."""
+    center = _default_center(world) if center is None else np.asarray(center, dtype=float)
+    extent = np.broadcast_to(np.asarray(extent_m, dtype=float), (world.dim,))
+    for _ in range(max_tries):
+        pos = center + (rng.random((n, world.dim)) - 0.5) * extent
+        if not world.points_free(pos).all():
+            continue
+        if min_separation_m > 0 and len(pairs_within(pos, min_separation_m)):
+            continue
+        if is_connected(n, pairs_within(pos, range_m)):
+            return pos
+    raise ValueError(
+        f"no connected placement of {n} robots in a box of {extent.tolist()} m found in "
+        f"{max_tries} draws; shrink extent_m or raise the sensing range"
+    )
+
+
 def grid_positions(n: int, dim: int, spacing_m: float, center: np.ndarray) -> np.ndarray:
     """A square (2-D) or cubic (3-D) lattice of ``n`` points centred on ``center``."""
     side = int(np.ceil(n ** (1.0 / dim)))
@@ -66,7 +94,7 @@ def grid_positions(n: int, dim: int, spacing_m: float, center: np.ndarray) -> np
 
 
 def initial_positions(
-    cfg: InitConfig, n: int, world: World, rng: np.random.Generator
+    cfg: InitConfig, n: int, world: World, rng: np.random.Generator, range_m: float = np.inf
 ) -> np.ndarray:
     """Place the team as ``cfg`` says (see :class:`tether.config.InitConfig`)."""
     center = None if cfg.center is None else np.asarray(cfg.center, dtype=float)
@@ -82,5 +110,11 @@ def initial_positions(
     if cfg.kind == "grid":
         return grid_positions(
             n, world.dim, cfg.spacing_m, _default_center(world) if center is None else center
+        )
+    if cfg.kind == "uniform":
+        if cfg.extent_m is None or len(cfg.extent_m) not in (1, world.dim):
+            raise ValueError(f"kind 'uniform' needs extent_m with {world.dim} side lengths")
+        return uniform_connected(
+            n, world, rng, np.asarray(cfg.extent_m), range_m, cfg.min_separation_m, center
         )
     return random_connected(n, world, rng, cfg.spacing_m, cfg.min_separation_m, center)

@@ -38,6 +38,7 @@ from typing import Literal
 import numpy as np
 
 from tether.geometry import unit
+from tether.graph import expand_rows
 
 Cost = Literal["desired_distance", "farthest"]
 
@@ -108,8 +109,28 @@ def step_bounds(
     keeps ``||x|| <= (||m_k|| - delta_r - s) / 2``, so two robots that sense
     each other never come closer than ``s``. Robots that sense nobody get ``inf``.
     """
+    bound = _pair_bounds(
+        directions[observer],
+        measured,
+        d_max_m=d_max_m,
+        radial_error_m=radial_error_m,
+        angular_error_rad=angular_error_rad,
+        min_separation_m=min_separation_m,
+    )
+    return _segment_min(bound, observer, n)
+
+
+def _pair_bounds(
+    u: np.ndarray,
+    measured: np.ndarray,
+    *,
+    d_max_m: float,
+    radial_error_m: float,
+    angular_error_rad: float,
+    min_separation_m: float,
+) -> np.ndarray:
+    """Step-length bound for unit direction ``u[k]`` from one measurement ``measured[k]``."""
     d_m = d_max_m - radial_error_m  # definition of d_m (section III)
-    u = directions[observer]
     dist = np.linalg.norm(measured, axis=1)
     cos_phi = np.einsum("kd,kd->k", u, unit(measured))
     phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
@@ -124,7 +145,7 @@ def step_bounds(
         may_approach = phi - angular_error_rad < np.pi / 2
         sep = 0.5 * (dist - radial_error_m - min_separation_m)
         bound = np.where(may_approach, np.minimum(bound, sep), bound)
-    return np.maximum(_segment_min(np.maximum(bound, 0.0), observer, n), 0.0)
+    return np.maximum(bound, 0.0)
 
 
 def constrained_steps(
@@ -137,23 +158,51 @@ def constrained_steps(
     angular_error_rad: float = 0.0,
     min_separation_m: float = 0.0,
     max_step_m: float = np.inf,
+    search_directions: bool = False,
 ) -> np.ndarray:
-    """Desired steps shrunk (direction kept) to satisfy (1), (2) and the speed limit."""
+    """Steps that satisfy (1), (2) and the speed limit, as close to ``desired`` as allowed.
+
+    By default (the paper's section IV) each desired step keeps its direction
+    and is shortened. With ``search_directions``, each robot also considers
+    heading straight at each robot it senses, and takes the candidate whose
+    allowed step makes the most first-order progress ``<x, desired>`` on its
+    cost (zero if none makes any). A robot whose desired direction is blocked
+    by a neighbour at the edge of its range then closes on that neighbour
+    instead of waiting, which relieves the tension that otherwise stalls a group
+    spread near ``d_max`` (large ``d0``). Every candidate obeys (1)-(2), so
+    Theorem 1 holds either way.
+    """
     n = len(desired)
     length = np.linalg.norm(desired, axis=1)
-    directions = unit(desired)
-    bound = step_bounds(
-        directions,
-        measured,
-        observer,
-        n,
+    if search_directions:
+        owner = np.concatenate([np.arange(n), observer])
+        cand = np.concatenate([unit(desired), unit(measured)])
+    else:
+        owner, cand = np.arange(n), unit(desired)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
+    which, entry = expand_rows(indptr, owner)
+    pair = _pair_bounds(
+        cand[which],
+        measured[entry],
         d_max_m=d_max_m,
         radial_error_m=radial_error_m,
         angular_error_rad=angular_error_rad,
         min_separation_m=min_separation_m,
     )
-    allowed = np.minimum(np.minimum(length, bound), max_step_m)
-    return directions * allowed[:, None]
+    allowed = np.minimum(
+        np.minimum(length[owner], _segment_min(pair, which, len(owner))), max_step_m
+    )
+    if not search_directions:
+        return cand * allowed[:, None]
+    progress = allowed * np.einsum("kd,kd->k", cand, unit(desired)[owner])
+    # best candidate per robot; ties keep the desired direction (listed first)
+    order = np.lexsort((np.arange(len(owner)), -progress, owner))
+    first = order[np.concatenate([[True], owner[order][1:] != owner[order][:-1]])]
+    best = np.zeros(n, dtype=np.intp)
+    best[owner[first]] = first
+    steps = cand[best] * allowed[best][:, None]
+    steps[progress[best] <= 0.0] = 0.0
+    return steps
 
 
 def satisfies_constraints(

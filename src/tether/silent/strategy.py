@@ -58,6 +58,11 @@ class SilentParams(BaseModel):
     trajectory: TrajectoryParams
     max_speed_mps: float | None = Field(default=None, gt=0)
     min_separation_m: float = Field(default=0.0, ge=0)
+    search_directions: bool = Field(
+        default=True,
+        description="if the desired direction is blocked, also try heading at each sensed "
+        "robot (see steering.constrained_steps); false: the paper's shrink-only step",
+    )
     robust: bool = Field(
         default=True,
         description="evaluate (1)-(2) for the worst true position within the sensor's error "
@@ -96,6 +101,7 @@ class SilentStrategy(StrategyBase):
         max_speed_mps: float | None = None,
         min_separation_m: float = 0.0,
         goal_tolerance_m: float = 0.5,
+        search_directions: bool = True,
     ) -> None:
         super().__init__()
         self.d_max_m = d_max_m
@@ -110,6 +116,7 @@ class SilentStrategy(StrategyBase):
         self.max_speed_mps = max_speed_mps
         self.min_separation_m = min_separation_m
         self.goal_tolerance_m = goal_tolerance_m
+        self.search_directions = search_directions
 
     # -- construction from a scenario -------------------------------------------------
     @classmethod
@@ -162,6 +169,7 @@ class SilentStrategy(StrategyBase):
             max_speed_mps=params.max_speed_mps,
             min_separation_m=params.min_separation_m,
             goal_tolerance_m=traj.goal_tolerance_m,
+            search_directions=params.search_directions,
         )
 
     # -- the Strategy protocol ---------------------------------------------------------
@@ -212,6 +220,7 @@ class SilentStrategy(StrategyBase):
             angular_error_rad=self.angular_error_rad,
             min_separation_m=self.min_separation_m,
             max_step_m=max_step,
+            search_directions=self.search_directions,
         )
         steps = self._avoid_obstacles(state.positions, steps)
         wanted = float(np.linalg.norm(desired[leader]))
