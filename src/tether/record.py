@@ -34,7 +34,6 @@ from tether import __version__
 from tether.sensing import Observation
 from tether.sim import StepRecord, TeamState
 
-
 _UMASK = os.umask(0)
 os.umask(_UMASK)
 
