@@ -28,7 +28,15 @@ from tether.recurrent.frontiers import FrontierCluster, frontier_clusters
 from tether.recurrent.geodesic import CoarseGrid
 from tether.recurrent.links import LinkModel
 
-__all__ = ["BASE", "FRONTIER", "RELAY", "ExplorationGraph", "GraphBuilder", "window_counts"]
+__all__ = [
+    "BASE",
+    "FRONTIER",
+    "RELAY",
+    "ExplorationGraph",
+    "GraphBuilder",
+    "snap_cluster",
+    "window_counts",
+]
 
 BASE, FRONTIER, RELAY = 0, 1, 2
 
@@ -87,21 +95,30 @@ class ExplorationGraph:
 
 def window_counts(mask: np.ndarray, points: np.ndarray, half_width: int) -> np.ndarray:
     """Number of true cells of ``mask`` in the square window of half width around each point."""
-    ii = np.zeros((mask.shape[0] + 1, mask.shape[1] + 1), dtype=np.int64)
-    ii[1:, 1:] = np.cumsum(np.cumsum(mask, axis=0), axis=1)
     c = np.floor(np.atleast_2d(points)).astype(np.intp)
-    x0 = np.clip(c[:, 0] - half_width, 0, mask.shape[0])
-    x1 = np.clip(c[:, 0] + half_width + 1, 0, mask.shape[0])
-    y0 = np.clip(c[:, 1] - half_width, 0, mask.shape[1])
-    y1 = np.clip(c[:, 1] + half_width + 1, 0, mask.shape[1])
+    nx_, ny_ = mask.shape
+    x0 = np.clip(c[:, 0] - half_width, 0, nx_)
+    x1 = np.clip(c[:, 0] + half_width + 1, 0, nx_)
+    y0 = np.clip(c[:, 1] - half_width, 0, ny_)
+    y1 = np.clip(c[:, 1] + half_width + 1, 0, ny_)
+    if len(c) * (2 * half_width + 1) ** 2 < mask.size:  # few small windows: sum directly
+        return np.array(
+            [np.count_nonzero(mask[a:b, e:f]) for a, b, e, f in zip(x0, x1, y0, y1, strict=True)],
+            dtype=np.int64,
+        )
+    ii = np.zeros((nx_ + 1, ny_ + 1), dtype=np.int64)
+    ii[1:, 1:] = np.cumsum(np.cumsum(mask, axis=0), axis=1)
     return ii[x1, y1] - ii[x0, y1] - ii[x1, y0] + ii[x0, y0]
 
 
-def _snap_cluster(cluster: FrontierCluster, coarse: CoarseGrid, allowed: np.ndarray) -> int:
+def snap_cluster(cluster: FrontierCluster, coarse: CoarseGrid, allowed: np.ndarray) -> int:
     """Allowed coarse node within one coarse cell of the cluster closest to its centroid."""
-    cc = np.unique(cluster.cells // coarse.factor, axis=0)
-    off = np.array([(dx, dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)])
-    cand = np.unique((cc[:, None, :] + off[None]).reshape(-1, 2), axis=0)
+    w = coarse.shape[1] + 2
+    cc = cluster.cells // coarse.factor
+    cc = np.unique((cc[:, 0] + 1) * w + (cc[:, 1] + 1))  # 1-D keys are much faster
+    off = np.array([dx * w + dy for dx in (-1, 0, 1) for dy in (-1, 0, 1)])
+    keys = np.unique((cc[:, None] + off[None]).ravel())
+    cand = np.stack([keys // w - 1, keys % w - 1], axis=1)
     ok = (
         (cand[:, 0] >= 0)
         & (cand[:, 0] < coarse.shape[0])
@@ -192,7 +209,7 @@ class GraphBuilder:
         for cluster in frontier_clusters(
             known, self.occupied, self.min_cluster_cells, self.max_cluster_extent
         ):
-            nd = _snap_cluster(cluster, coarse, allowed)
+            nd = snap_cluster(cluster, coarse, allowed)
             if nd < 0 or nd == base_node:
                 continue
             if nd in index:

@@ -38,7 +38,13 @@ class CoarseGrid:
         self.fine_shape = free.shape
         cx, cy = free.shape[0] // f, free.shape[1] // f
         self.shape = (cx, cy)
-        blocks = free[: cx * f, : cy * f].reshape(cx, f, cy, f).all(axis=(1, 3))
+        crop = free[: cx * f, : cy * f]
+        rows = crop[0::f]
+        for k in range(1, f):
+            rows = rows & crop[k::f]
+        blocks = rows[:, 0::f]
+        for k in range(1, f):
+            blocks = blocks & rows[:, k::f]
         self.traversable = blocks
         node = np.full((cx, cy), -1, dtype=np.intp)
         cells = np.argwhere(blocks)

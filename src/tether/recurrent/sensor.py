@@ -50,7 +50,7 @@ def cast_rays(
     Returns
     -------
     list of ndarray
-        For each origin, the unique flat indices (into ``occupied.ravel()``)
+        For each origin, the flat indices (into ``occupied.ravel()``, possibly repeated)
         of the observed cells: free cells up to and including the first hit.
     """
     occupied = np.asarray(occupied, dtype=bool)
@@ -82,7 +82,7 @@ def cast_rays(
         seen &= inside
         flat = ixc * ny_ + iyc
         for g, i in enumerate(idx):
-            result[i] = np.unique(flat[g][seen[g]])
+            result[i] = flat[g][seen[g]]
     return result
 
 
