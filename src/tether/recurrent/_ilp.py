@@ -1,0 +1,323 @@
+"""Exact optimal configurations: the directed-cut ILP of Banfi et al., eqs. (2)-(4).
+
+Model on the transformed graph of Sec. IV-A (root ``b`` = index 0, arcs in
+both directions except into ``b``), solved by branch-and-cut:
+
+    max  sum_f U(f) y_f                                        (2)
+    sum_v y_v <= |R^t|                                         (3)
+    x(delta^-(S)) >= y_k   for all S not containing b, k in S  (4)
+
+with binary arc variables ``x`` and vertex variables ``y``. The paper's (4) is
+stated for frontiers; as in the B-RMWCS formulation it is taken from
+(Alvarez-Miranda, Ljubic, Mutzel 2013, the paper's [13]), we keep a ``y`` for
+every vertex and add valid equalities and inequalities that make the LP
+relaxation strong without changing the optimum:
+
+* in-degree: ``x(delta^-(v)) = y_v`` (the solution is an arborescence, so its
+  arc count equals its vertex count and (3) counts robots);
+* 2-cycles: ``x_ij + x_ji <= y_i`` for ``i, j != b``;
+* no useless leaves: ``y_v <= x(delta^+(v))`` for non-frontiers ``v`` (a
+  non-frontier leaf can be dropped without loss).
+
+Cuts (4) are separated by max-flow (``scipy.sparse.csgraph.maximum_flow``)
+from ``b`` to every vertex with positive ``y``, with nested cuts (saturate
+the cut found, search again) and back cuts (the minimum cut closest to the
+sink), as the paper does with Gurobi following [13].
+
+Before the solve, two more exact reductions shrink the graph: vertices whose
+neighbourhood is contained in the closed neighbourhood of another vertex are
+removed if they are not frontiers (any tree through them can use the
+dominating vertex instead, at the same or lower robot count), and the hop
+reductions of :mod:`._problem` are re-applied. The APX solution (Algorithm 1,
+``delta = 4``) is passed to the solver as the starting incumbent.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import breadth_first_order, maximum_flow, shortest_path
+
+from tether.recurrent._problem import UNREACHABLE, Problem
+
+EPS = 1e-6
+SCALE = 1_000_000  # max-flow capacities are x* scaled to integers
+NESTED = 3
+
+
+@dataclass
+class IlpResult:
+    vertices: set[int]
+    utility: float
+    proven_optimal: bool
+    upper_bound: float
+    stats: dict = field(default_factory=dict)
+
+
+# ---------------------------------------------------------------- reductions
+
+
+def reduce_dominated(problem: Problem) -> np.ndarray:
+    """Indices kept after removing dominated non-frontier vertices (root kept)."""
+    n = problem.n
+    a = problem.adj.toarray() > 0
+    alive = np.ones(n, dtype=bool)
+    frontier = problem.utility > 0
+    for _ in range(3):
+        changed = False
+        aa = a & alive[None, :] & alive[:, None]
+        deg = aa.sum(axis=1)
+        closed = aa | np.eye(n, dtype=bool)
+        inter = aa.astype(np.int32) @ closed.T.astype(np.int32)  # |N(v) & N[u]|
+        for v in range(1, n):
+            if not alive[v] or frontier[v]:
+                continue
+            nv = aa[v] & alive
+            cand = np.flatnonzero(alive & (inter[v] >= nv.sum()))
+            cand = cand[cand != v]
+            for u in cand:  # recheck against the current (already reduced) graph
+                nu = closed[u] & alive
+                if not np.any(nv & ~nu & (np.arange(n) != u)):
+                    alive[v] = False
+                    changed = True
+                    break
+        if not changed:
+            break
+    # hop reductions again on the smaller graph
+    keep = np.flatnonzero(alive)
+    sub = problem.adj[keep][:, keep]
+    dist = shortest_path(sub, unweighted=True, directed=False)
+    fr = np.flatnonzero(problem.utility[keep] > 0)
+    if len(fr) == 0:
+        return keep[:1]
+    ok = dist[0] + dist[fr].min(axis=0) <= problem.budget
+    ok[0] = True
+    return keep[ok]
+
+
+# ---------------------------------------------------------------- the model
+
+
+class DirectedCutModel:
+    """Arrays describing the ILP; columns are ``x_0..x_{A-1}`` then ``y_1..y_{n-1}``."""
+
+    def __init__(self, problem: Problem, keep: np.ndarray) -> None:
+        self.keep = keep
+        n = self.n = len(keep)
+        adj = sp.triu(problem.adj[keep][:, keep], k=1).tocoo()
+        i, j = adj.row.astype(np.intp), adj.col.astype(np.intp)
+        # root arcs only leave the root
+        root_edge = i == 0
+        tail = np.concatenate([i, j[~root_edge]])
+        head = np.concatenate([j, i[~root_edge]])
+        self.tail, self.head = tail, head
+        self.n_arcs = len(tail)
+        self.utility = problem.utility[keep]
+        self.budget = problem.budget
+        self.n_cols = self.n_arcs + n - 1
+        self.cost = np.zeros(self.n_cols)
+        self.cost[self.n_arcs :] = self.utility[1:]
+        self.in_arcs = [np.flatnonzero(head == v) for v in range(n)]
+        self.out_arcs = [np.flatnonzero(tail == v) for v in range(n)]
+        # reverse arc of each arc (or -1 for root arcs)
+        pair = {(int(t), int(h)): a for a, (t, h) in enumerate(zip(tail, head, strict=True))}
+        self.rev = np.array(
+            [pair.get((int(h), int(t)), -1) for t, h in zip(tail, head, strict=True)]
+        )
+
+    def ycol(self, v: int) -> int:
+        return self.n_arcs + v - 1
+
+    def base_rows(self) -> tuple[list[np.ndarray], list[np.ndarray], list[float], list[float]]:
+        """Rows ``(cols, coefs, lower, upper)`` of the initial formulation."""
+        cols, vals, lo, hi = [], [], [], []
+        inf = np.inf
+        for v in range(1, self.n):  # in-degree
+            cols.append(np.append(self.in_arcs[v], self.ycol(v)))
+            vals.append(np.append(np.ones(len(self.in_arcs[v])), -1.0))
+            lo.append(0.0)
+            hi.append(0.0)
+        cols.append(np.arange(self.n_arcs, self.n_cols))  # budget, eq. (3)
+        vals.append(np.ones(self.n - 1))
+        lo.append(-inf)
+        hi.append(float(self.budget))
+        for a in range(self.n_arcs):  # 2-cycles: x_ij + x_ji <= y_i
+            r = self.rev[a]
+            t = int(self.tail[a])
+            if r > a and t != 0:
+                for end in (t, int(self.head[a])):
+                    cols.append(np.array([a, r, self.ycol(end)]))
+                    vals.append(np.array([1.0, 1.0, -1.0]))
+                    lo.append(-inf)
+                    hi.append(0.0)
+        for v in range(1, self.n):  # no useless leaves
+            if self.utility[v] <= 0:
+                cols.append(np.append(self.out_arcs[v], self.ycol(v)))
+                vals.append(np.append(-np.ones(len(self.out_arcs[v])), 1.0))
+                lo.append(-inf)
+                hi.append(0.0)
+        return cols, vals, lo, hi
+
+    def cut_row(self, arcs: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Row ``x(arcs) - y_k >= 0`` of a cut (4)."""
+        return np.append(arcs, self.ycol(k)), np.append(np.ones(len(arcs)), -1.0)
+
+    def solution_vector(self, vertices: set[int], pred: dict[int, int]) -> np.ndarray:
+        """Column values of a tree given by parent pointers (keep-indexed)."""
+        val = np.zeros(self.n_cols)
+        index = {
+            (int(t), int(h)): a for a, (t, h) in enumerate(zip(self.tail, self.head, strict=True))
+        }
+        for v in vertices:
+            if v == 0:
+                continue
+            val[self.ycol(v)] = 1.0
+            val[index[(pred[v], v)]] = 1.0
+        return val
+
+    # ------------------------------------------------------------ separation
+
+    def arcs_into(self, inside: np.ndarray) -> np.ndarray:
+        """Arcs entering the vertex set marked by the boolean mask ``inside``."""
+        return np.flatnonzero(~inside[self.tail] & inside[self.head])
+
+    def separate_integral(self, x: np.ndarray, y: np.ndarray) -> list[tuple[np.ndarray, int]]:
+        """Cuts violated by an integral point: chosen vertices unreachable from b."""
+        used = x > 0.5
+        g = sp.csr_matrix(
+            (np.ones(int(used.sum())), (self.tail[used], self.head[used])), shape=(self.n, self.n)
+        )
+        reach = np.zeros(self.n, dtype=bool)
+        reach[breadth_first_order(g, 0, directed=True, return_predecessors=False)] = True
+        chosen = np.zeros(self.n, dtype=bool)
+        chosen[1:] = y > 0.5
+        lost = np.flatnonzero(chosen & ~reach)
+        if len(lost) == 0:
+            return []
+        cuts = [(self.arcs_into(~reach), int(lost[0]))]
+        # the components of the unreachable part give smaller, stronger cuts
+        sub = g[lost][:, lost]
+        from scipy.sparse.csgraph import connected_components
+
+        ncomp, lab = connected_components(sub, directed=True, connection="weak")
+        for c in range(ncomp):
+            members = lost[lab == c]
+            inside = np.zeros(self.n, dtype=bool)
+            inside[members] = True
+            for k in members[:3]:
+                cuts.append((self.arcs_into(inside), int(k)))
+        return cuts
+
+    def separate_fractional(
+        self, x: np.ndarray, y: np.ndarray, max_targets: int = 200
+    ) -> list[tuple[np.ndarray, int]]:
+        """Max-flow separation of (4) with nested and back cuts."""
+        cap = np.round(np.clip(x, 0, 1) * SCALE).astype(np.int64)
+        yv = np.concatenate([[1.0], y])
+        targets = np.argsort(-yv)
+        cuts: list[tuple[np.ndarray, int]] = []
+        seen: set[bytes] = set()
+        done = 0
+        for t in targets:
+            if t == 0 or yv[t] < 1e-4:
+                continue
+            if done >= max_targets:
+                break
+            done += 1
+            c = cap.copy()
+            for _ in range(NESTED):
+                flow, inside, back = self._min_cut(c, int(t))
+                if flow >= yv[t] - 1e-4:
+                    break
+                for mask in (inside, back):
+                    arcs = self.arcs_into(mask)
+                    key = arcs.tobytes() + int(t).to_bytes(4, "little")
+                    if key not in seen:
+                        seen.add(key)
+                        cuts.append((arcs, int(t)))
+                c[self.arcs_into(inside)] = SCALE  # nested: saturate and search again
+        return cuts
+
+    def _min_cut(self, cap: np.ndarray, t: int) -> tuple[float, np.ndarray, np.ndarray]:
+        pos = cap > 0
+        g = sp.csr_matrix(
+            (cap[pos].astype(np.int32), (self.tail[pos], self.head[pos])), shape=(self.n, self.n)
+        )
+        res = maximum_flow(g, 0, t, method="dinic")
+        resid = (g - res.flow).tocsr()
+        resid.data = (resid.data > 0).astype(np.int8)
+        resid.eliminate_zeros()
+        src_side = np.zeros(self.n, dtype=bool)
+        src_side[breadth_first_order(resid, 0, directed=True, return_predecessors=False)] = True
+        sink_side = np.zeros(self.n, dtype=bool)
+        sink_side[
+            breadth_first_order(resid.T.tocsr(), t, directed=True, return_predecessors=False)
+        ] = True
+        return res.flow_value / SCALE, ~src_side, sink_side
+
+
+# ---------------------------------------------------------------- drivers
+
+
+def _incumbent(problem: Problem, keep: np.ndarray) -> tuple[set[int], dict[int, int]] | None:
+    """APX (delta = 4) on the reduced graph, as a tree with parent pointers."""
+    from tether.recurrent._apx import solve_apx
+
+    adj = problem.adj[keep][:, keep]
+    dist_f, pred = shortest_path(adj, unweighted=True, directed=False, return_predecessors=True)
+    dist = np.where(np.isfinite(dist_f), dist_f, UNREACHABLE).astype(np.int32)
+    sub = Problem(
+        [problem.labels[i] for i in keep],
+        adj,
+        dist,
+        pred,
+        problem.utility[keep],
+        problem.budget,
+        problem.fixed,
+    )
+    verts = solve_apx(sub, 4).vertices
+    if len(verts) <= 1:
+        return None
+    idx = np.fromiter(sorted(verts), dtype=np.intp)
+    order, preds = breadth_first_order(adj[idx][:, idx], 0, directed=False)
+    if len(order) != len(idx):
+        return None
+    parent = {int(idx[v]): int(idx[p]) for v, p in enumerate(preds) if p >= 0}
+    return verts, parent
+
+
+def _decode(model: DirectedCutModel, values: np.ndarray) -> set[int]:
+    y = values[model.n_arcs :]
+    return {0} | {int(v) for v in np.flatnonzero(y > 0.5) + 1}
+
+
+def solve_ilp(
+    problem: Problem, backend: str = "scip", time_limit_s: float | None = None
+) -> IlpResult:
+    """Solve eqs. (2)-(4) to proven optimality (see the module docstring)."""
+    t0 = time.perf_counter()
+    if problem.budget == 0 or not np.any(problem.utility > 0):
+        return IlpResult({0}, 0.0, True, 0.0, {})
+    keep = reduce_dominated(problem)
+    model = DirectedCutModel(problem, keep)
+    hint = _incumbent(problem, keep)
+    stats = {
+        "n_reduced": int(model.n),
+        "arcs": int(model.n_arcs),
+        "reduce_s": time.perf_counter() - t0,
+    }
+    if backend == "scip":
+        from tether.recurrent._ilp_scip import solve_scip as run
+    elif backend == "highs":
+        from tether.recurrent._ilp_highs import solve_highs as run
+    else:
+        raise ValueError(f"unknown ILP backend {backend!r}; expected 'scip' or 'highs'")
+    values, proven, bound, more = run(model, hint, time_limit_s)
+    stats.update(more)
+    local = _decode(model, values)
+    verts = {int(keep[v]) for v in local}
+    utility = float(problem.utility[list(verts)].sum())
+    return IlpResult(verts, utility, proven, max(bound, utility), stats)
