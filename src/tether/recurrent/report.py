@@ -1,0 +1,376 @@
+"""Re-make Figs. 4-6 of the recurrent-connectivity paper.
+
+Banfi et al., Sec. VII-A: 12 robots, 900 steps, 5 runs per setting varying
+the BS position, on the Cluttered (``grass``), Office (``offices``) and Open
+(``open``) maps.
+
+* Fig. 4: ILP against APX (``delta = 4``) with ``theta = 12``, (a) counting
+  planning time in simulation steps, (b) instantaneous planning;
+* Fig. 5: explored area known at the BS over time for ``theta`` in
+  {1, 3, 6, 9, 12} and the Utility baseline (``r = 0.5``);
+* Fig. 6: time robots spend out of communication with the BS.
+
+This is a long experiment (benchmark-like), not a test::
+
+    python -m tether.recurrent.report OUT_DIR --runs 5 --steps 900
+
+Every run is written as a run folder (Parquet + ``summary.json``) under
+``OUT_DIR/runs/<map>/<setting>/run<k>``; finished runs are reused when the
+report is run again. Figures go to ``OUT_DIR/fig4_<map>.png``,
+``fig5.png`` and ``fig6.png``; final explored fractions (and out-of-comm
+times, planning times) to ``OUT_DIR/report.json``.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+import platform
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["make_report", "plot_map", "plot_run", "run_one"]
+
+MAPS_DIR = Path(__file__).resolve().parents[3] / ".." / "shared" / "maps"
+MAP_LABELS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
+
+
+# ---------------------------------------------------------------------- plots
+def plot_run(result: Any) -> Any:
+    """Explored fraction at the BS and robots connected, over time (one run)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    t = np.arange(len(result.explored))
+    ax.plot(t, 100 * result.explored, label="explored (known at BS)")
+    ax2 = ax.twinx()
+    ax2.plot(t, result.connected.sum(axis=1), color="tab:orange", lw=0.8, alpha=0.6)
+    ax2.set_ylabel("robots connected to BS", color="tab:orange")
+    ax.set_xlabel("step")
+    ax.set_ylabel("explored area [%]")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def plot_map(sim: Any, result: Any) -> Any:
+    """Map known at the BS at the end, trajectories, BS position."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    img = np.full(sim.shape, 0.6)
+    known = sim.knowledge.global_known
+    img[known & ~sim.occupied] = 1.0
+    img[known & sim.occupied] = 0.0
+    fig, ax = plt.subplots(figsize=(7, 7 * sim.shape[1] / max(sim.shape[0], 1)))
+    ax.imshow(img.T, origin="lower", cmap="gray", vmin=0, vmax=1, interpolation="nearest")
+    pos = result.positions
+    for r in range(pos.shape[1]):
+        ax.plot(pos[:, r, 0] - 0.5, pos[:, r, 1] - 0.5, lw=0.7)
+    ax.plot(*(sim.base - 0.5), "s", color="green", ms=8, label="BS")
+    ax.scatter(pos[-1, :, 0] - 0.5, pos[-1, :, 1] - 0.5, s=12, c="blue", zorder=3)
+    ax.set_axis_off()
+    fig.tight_layout()
+    return fig
+
+
+# ---------------------------------------------------------------------- runs
+def _settings(thetas: tuple[int, ...]) -> dict[str, dict[str, Any]]:
+    out: dict[str, dict[str, Any]] = {
+        "apx_t12_timed": {"kind": "recurrent", "theta": 12, "method": "apx", "timed": True},
+        "ilp_t12_timed": {"kind": "recurrent", "theta": 12, "method": "ilp", "timed": True},
+        "apx_t12_instant": {"kind": "recurrent", "theta": 12, "method": "apx", "timed": False},
+        "ilp_t12_instant": {"kind": "recurrent", "theta": 12, "method": "ilp", "timed": False},
+    }
+    for th in thetas:
+        out[f"theta{th}"] = {"kind": "recurrent", "theta": th, "method": "apx", "timed": False}
+    out["utility"] = {"kind": "utility"}
+    return out
+
+
+def run_one(
+    map_path: str,
+    setting: dict[str, Any],
+    seed: int,
+    steps: int,
+    n_robots: int,
+    run_dir: str,
+    check: bool = False,
+) -> dict[str, Any]:
+    """One run of one setting; writes its run folder and returns the summary."""
+    from tether.record import RunFolder
+    from tether.recurrent.baseline_utility import UtilityStrategy
+    from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, random_base
+    from tether.recurrent.replanning import RecurrentStrategy
+    from tether.recurrent.strategy import run_summary, write_run
+    from tether.world.maps import load_map
+
+    path = Path(run_dir)
+    done = path / "summary.json"
+    if done.exists():
+        return json.loads(done.read_text())
+    # black (0) is an obstacle, anything else free (../shared/maps/README.md)
+    occupied = load_map(map_path, occupied_thresh=0.999, free_thresh=0.998).occupied
+    cfg = ExplorationConfig(n_robots=n_robots, steps=steps)
+    base = random_base(occupied, cfg.coarse_factor, np.random.default_rng(seed))
+    if setting["kind"] == "utility":
+        strategy: Any = UtilityStrategy(ratio=0.5)
+    else:
+        strategy = RecurrentStrategy(
+            theta=setting["theta"],
+            method=setting["method"],
+            delta=4,
+            count_planning_time=setting["timed"],
+            check=check,
+        )
+    import time
+
+    tic = time.perf_counter()
+    sim = ExplorationSim(occupied, base, strategy, cfg)
+    strategy.start(sim)
+    for _ in range(steps):
+        sim.step()
+    result = sim.result(time.perf_counter() - tic)
+    summary = run_summary(
+        result,
+        scenario=Path(map_path).stem,
+        strategy=strategy.name,
+        seed=seed,
+        n_robots=n_robots,
+    )
+    summary["setting"] = setting
+    summary["base_cells"] = sim.base.tolist()
+    write_run(RunFolder(path), result, summary, figures=False)
+    return summary
+
+
+def _curve(run_dir: Path) -> np.ndarray:
+    import pyarrow.parquet as pq
+
+    return pq.read_table(run_dir / "steps.parquet").column("explored_fraction").to_numpy()
+
+
+def _machine() -> dict[str, Any]:
+    import scipy
+
+    return {
+        "platform": platform.platform(),
+        "cpu_count": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+    }
+
+
+def make_report(
+    out_dir: str | Path,
+    maps: tuple[str, ...] = ("grass", "offices", "open"),
+    runs: int = 5,
+    steps: int = 900,
+    *,
+    n_robots: int = 12,
+    thetas: tuple[int, ...] = (1, 3, 6, 9, 12),
+    settings: tuple[str, ...] | None = None,
+    maps_dir: str | Path | None = None,
+    workers: int | None = None,
+    check: bool = False,
+) -> dict[str, Any]:
+    """Run the experiments of Figs. 4-6 and write figures and ``report.json``.
+
+    Parameters
+    ----------
+    out_dir
+        Output folder (created); finished runs found there are reused.
+    maps
+        Map names (files ``<maps_dir>/<name>.png``).
+    runs, steps, n_robots
+        Runs per setting (seeds ``0..runs-1`` fix the BS position, shared by
+        all settings), steps per run, team size.
+    thetas
+        Replanning thresholds for Figs. 5-6.
+    settings
+        Subset of settings to run (default all: ``apx/ilp_t12_timed``,
+        ``apx/ilp_t12_instant``, ``theta<k>``, ``utility``).
+    maps_dir
+        Where the maps are (default ``../shared/maps`` next to the repository).
+    workers
+        Parallel processes (default: CPU count). Timed settings (Fig. 4a)
+        measure planning wall time, so they are sensitive to machine load.
+    check
+        Check constraints (I)-(IV) on every plan (slower).
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    mdir = Path(maps_dir) if maps_dir is not None else MAPS_DIR
+    all_settings = _settings(tuple(thetas))
+    chosen = {k: v for k, v in all_settings.items() if settings is None or k in settings}
+    jobs = []
+    for m in maps:
+        map_path = mdir / f"{m}.png"
+        if not map_path.exists():
+            raise FileNotFoundError(f"{map_path}: map not found (give maps_dir)")
+        for label, setting in chosen.items():
+            for k in range(runs):
+                run_dir = out / "runs" / m / label / f"run{k}"
+                jobs.append(
+                    (m, label, k, (str(map_path), setting, k, steps, n_robots, str(run_dir), check))
+                )
+    summaries: dict[tuple[str, str, int], dict[str, Any]] = {}
+    with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
+        futures = {pool.submit(run_one, *args): (m, label, k) for m, label, k, args in jobs}
+        for fut, key in futures.items():
+            summaries[key] = fut.result()
+            s = summaries[key]
+            print(
+                f"{key[0]:8s} {key[1]:16s} run{key[2]}: explored {s['final_explored_fraction']:.3f}"
+                f" out-of-comm {s['out_of_comm_mean_steps']:.0f} wall {s['wall_time_s']:.1f}s",
+                flush=True,
+            )
+    report: dict[str, Any] = {
+        "runs": runs,
+        "steps": steps,
+        "n_robots": n_robots,
+        "machine": _machine(),
+        "maps": {},
+    }
+    for m in maps:
+        entry: dict[str, Any] = {}
+        for label in chosen:
+            ss = [summaries[(m, label, k)] for k in range(runs)]
+            fin = [s["final_explored_fraction"] for s in ss]
+            occ = [s["out_of_comm_mean_steps"] for s in ss]
+            pt = [s.get("planning_time_mean_s", 0.0) for s in ss]
+            ptmax = [s.get("planning_time_max_s", 0.0) for s in ss]
+            entry[label] = {
+                "final_explored": fin,
+                "final_explored_mean": float(np.mean(fin)),
+                "final_explored_std": float(np.std(fin)),
+                "out_of_comm_mean_steps": float(np.mean(occ)),
+                "out_of_comm_std_steps": float(np.std(occ)),
+                "planning_time_mean_s": float(np.mean(pt)),
+                "planning_time_max_s": float(np.max(ptmax)),
+                "plans_mean": float(np.mean([s.get("plans", 0) for s in ss])),
+                "constraint_violations": int(sum(s.get("constraint_violations", 0) for s in ss)),
+                "wall_time_mean_s": float(np.mean([s["wall_time_s"] for s in ss])),
+            }
+        report["maps"][m] = entry
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    _figures(out, maps, chosen, runs, thetas)
+    return report
+
+
+def _figures(
+    out: Path, maps: tuple[str, ...], chosen: dict[str, Any], runs: int, thetas: tuple[int, ...]
+) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    def mean_curve(m: str, label: str) -> tuple[np.ndarray, np.ndarray]:
+        curves = np.array([_curve(out / "runs" / m / label / f"run{k}") for k in range(runs)])
+        return 100 * curves.mean(axis=0), 100 * curves.std(axis=0)
+
+    def band(ax: Any, m: str, label: str, name: str) -> None:
+        mu, sd = mean_curve(m, label)
+        t = np.arange(len(mu))
+        ax.plot(t, mu, label=name)
+        ax.fill_between(t, mu - sd, mu + sd, alpha=0.15)
+
+    for m in maps:
+        pairs = [("timed", "(a) with replanning time"), ("instant", "(b) instantaneous planning")]
+        if not any(f"apx_t12_{p}" in chosen for p, _ in pairs):
+            continue
+        fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
+        for ax, (mode, title) in zip(axes, pairs, strict=True):
+            for method in ("ilp", "apx"):
+                label = f"{method}_t12_{mode}"
+                if label in chosen:
+                    band(ax, m, label, method.upper())
+            ax.set_title(f"{MAP_LABELS.get(m, m)}: {title}")
+            ax.set_xlabel("step")
+            ax.grid(alpha=0.3)
+            ax.legend()
+        axes[0].set_ylabel("explored area [%]")
+        fig.tight_layout()
+        fig.savefig(out / f"fig4_{m}.png", dpi=120)
+        plt.close(fig)
+
+    curves = [f"theta{th}" for th in thetas if f"theta{th}" in chosen]
+    if "utility" in chosen:
+        curves.append("utility")
+    if curves:
+        fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.8), squeeze=False)
+        for ax, m in zip(axes[0], maps, strict=True):
+            for label in curves:
+                name = "Utility" if label == "utility" else f"θ = {label[5:]}"
+                band(ax, m, label, name)
+            ax.set_title(MAP_LABELS.get(m, m))
+            ax.set_xlabel("step")
+            ax.set_ylabel("explored area [%]")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(out / "fig5.png", dpi=120)
+        plt.close(fig)
+
+        rep = json.loads((out / "report.json").read_text())
+        fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.5), squeeze=False)
+        for ax, m in zip(axes[0], maps, strict=True):
+            e = rep["maps"][m]
+            names = ["Utility" if c == "utility" else f"θ={c[5:]}" for c in curves]
+            mu = [e[c]["out_of_comm_mean_steps"] for c in curves]
+            sd = [e[c]["out_of_comm_std_steps"] for c in curves]
+            ax.bar(names, mu, yerr=sd, capsize=3)
+            ax.set_title(MAP_LABELS.get(m, m))
+            ax.set_ylabel("steps out of communication (mean per robot)")
+            ax.grid(axis="y", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(out / "fig6.png", dpi=120)
+        plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out_dir")
+    ap.add_argument("--maps", nargs="+", default=["grass", "offices", "open"])
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--steps", type=int, default=900)
+    ap.add_argument("--robots", type=int, default=12)
+    ap.add_argument("--settings", nargs="*", default=None)
+    ap.add_argument("--maps-dir", default=None)
+    ap.add_argument("--workers", type=int, default=None)
+    ap.add_argument("--check", action="store_true")
+    a = ap.parse_args(argv)
+    rep = make_report(
+        a.out_dir,
+        maps=tuple(a.maps),
+        runs=a.runs,
+        steps=a.steps,
+        n_robots=a.robots,
+        settings=tuple(a.settings) if a.settings else None,
+        maps_dir=a.maps_dir,
+        workers=a.workers,
+        check=a.check,
+    )
+    for m, e in rep["maps"].items():
+        for label, v in e.items():
+            mu, sd = v["final_explored_mean"], v["final_explored_std"]
+            print(f"{m:8s} {label:16s} final {mu:.3f} ± {sd:.3f}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
