@@ -9,7 +9,8 @@ place:
 * **loss** -- each directed message is dropped independently with
   probability ``loss_probability``;
 * **delay** -- a message sent in round ``r`` arrives in round
-  ``r + delay_rounds`` (if its link still exists then);
+  ``r + delay_rounds`` (if its link still exists then; a mailbox is
+  emptied when its link disappears);
 * **failure** -- a failed robot neither sends nor receives from its failure
   round on (``failures = {robot: round}``).
 
@@ -87,21 +88,42 @@ class MessageLayer:
         self.params = params
         self.rng = rng
         self.round = 0
-        self._in_flight: deque[tuple[np.ndarray, np.ndarray, np.ndarray]] = deque()
-        self._box_code = np.empty(0, dtype=np.int64)
-        self._box_vals = np.empty((0, 0))
-        self._box_sent = np.empty(0, dtype=np.int64)
+        self._in_flight: deque[tuple[np.ndarray, np.ndarray, int]] = deque()
+        # mailbox aligned with the current directed links (codes receiver * n + sender)
+        self._codes = np.empty(0, dtype=np.int64)
+        self._order = np.empty(0, dtype=np.intp)
+        self._vals = np.empty((0, 0))
+        self._sent_at = np.empty(0, dtype=np.int64)
+        self._dead_from = np.full(n, np.iinfo(np.int64).max)
+        for robot, at in params.failures.items():
+            if 0 <= robot < n:
+                self._dead_from[robot] = at
         self.sent = 0
         self.delivered = 0
 
     def alive(self, round_: int | None = None) -> np.ndarray:
         """Boolean ``(n,)``: robots that have not failed by ``round_`` (default: now)."""
-        r = self.round if round_ is None else round_
-        ok = np.ones(self.n, dtype=bool)
-        for robot, at in self.params.failures.items():
-            if 0 <= robot < self.n and r >= at:
-                ok[robot] = False
-        return ok
+        return (self.round if round_ is None else round_) < self._dead_from
+
+    def _slots(self, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mailbox slots of ``codes`` among the current links, and whether each exists."""
+        if len(self._codes) == 0:
+            return np.zeros(len(codes), dtype=np.intp), np.zeros(len(codes), dtype=bool)
+        pos = np.minimum(np.searchsorted(self._codes, codes, sorter=self._order),
+                         len(self._codes) - 1)  # fmt: skip
+        slot = self._order[pos]
+        return slot, self._codes[slot] == codes
+
+    def _relink(self, codes: np.ndarray, k: int) -> None:
+        """Re-align the mailboxes with a new link set (mail over vanished links is dropped)."""
+        vals = np.full((len(codes), k), np.nan)
+        sent_at = np.full(len(codes), -1, dtype=np.int64)
+        if self._vals.shape[1] == k:
+            slot, found = self._slots(codes)
+            vals[found] = self._vals[slot[found]]
+            sent_at[found] = self._sent_at[slot[found]]
+        self._codes, self._order = codes, np.argsort(codes, kind="stable")
+        self._vals, self._sent_at = vals, sent_at
 
     def exchange(self, pairs: np.ndarray, values: np.ndarray) -> Inbox:
         """One round: every alive robot broadcasts its row of ``values`` to its neighbours.
@@ -115,45 +137,34 @@ class MessageLayer:
         """
         values = np.asarray(values, dtype=float).reshape(self.n, -1)
         k = values.shape[1]
-        if self._box_vals.shape[1] != k:
-            self._box_vals = np.empty((0, k))
         recv, send = directed(pairs)
+        codes = recv.astype(np.int64) * self.n + send
+        if self._vals.shape[1] != k or not np.array_equal(codes, self._codes):
+            self._relink(codes, k)
         alive = self.alive()
         ok = alive[recv] & alive[send]
+        self.sent += int(ok.sum())
         if self.params.loss_probability > 0:
             ok &= self.rng.random(len(recv)) >= self.params.loss_probability
-        self.sent += int((alive[recv] & alive[send]).sum())
-        code = recv[ok].astype(np.int64) * self.n + send[ok]
-        self._in_flight.append((code, values[send[ok]], np.full(len(code), self.round)))
-        codes_now = recv.astype(np.int64) * self.n + send
-        if len(self._in_flight) > self.params.delay_rounds:
-            code_d, vals_d, sent_d = self._in_flight.popleft()
-            # deliver only over links that exist now, to receivers that are alive now
-            arrive = np.isin(code_d, codes_now) & alive[code_d // self.n]
-            self.delivered += int(arrive.sum())
-            self._store(code_d[arrive], vals_d[arrive], sent_d[arrive])
-        out_vals = np.full((len(recv), k), np.nan)
-        age = np.full(len(recv), -1, dtype=np.int64)
-        if len(self._box_code):
-            pos = np.searchsorted(self._box_code, codes_now)
-            pos = np.minimum(pos, len(self._box_code) - 1)
-            hit = self._box_code[pos] == codes_now
-            out_vals[hit] = self._box_vals[pos[hit]]
-            age[hit] = self.round - self._box_sent[pos[hit]]
+        if self.params.delay_rounds == 0:
+            self._vals[ok] = values[send[ok]]
+            self._sent_at[ok] = self.round
+            self.delivered += int(ok.sum())
+        else:
+            self._in_flight.append((codes[ok], values[send[ok]], self.round))
+            if len(self._in_flight) > self.params.delay_rounds:
+                code_d, vals_d, sent_d = self._in_flight.popleft()
+                slot, found = self._slots(code_d)
+                # deliver only over links that exist now, to receivers alive now
+                found &= alive[code_d // self.n]
+                newer = found.copy()
+                newer[found] = self._sent_at[slot[found]] < sent_d
+                self._vals[slot[newer]] = vals_d[newer]
+                self._sent_at[slot[newer]] = sent_d
+                self.delivered += int(found.sum())
+        age = np.where(self._sent_at >= 0, self.round - self._sent_at, -1)
         self.round += 1
-        return Inbox(recv, send, out_vals, age)
-
-    def _store(self, code: np.ndarray, vals: np.ndarray, sent: np.ndarray) -> None:
-        """Merge delivered messages into the mailboxes (newer replaces older)."""
-        all_code = np.concatenate([self._box_code, code])
-        all_vals = np.concatenate([self._box_vals, vals])
-        all_sent = np.concatenate([self._box_sent, sent])
-        order = np.lexsort((-all_sent, all_code))
-        all_code = all_code[order]
-        first = np.r_[True, all_code[1:] != all_code[:-1]]
-        self._box_code = all_code[first]
-        self._box_vals = all_vals[order][first]
-        self._box_sent = all_sent[order][first]
+        return Inbox(recv, send, self._vals, age)
 
     @property
     def delivery_ratio(self) -> float:

@@ -95,9 +95,9 @@ class EstimatorConfig(_Strict):
     k1: float = 4.0
     k2: float = 1.0
     k3: float = 2.0
-    gamma: float = 1.0
+    gamma: float = 4.0
     kp: float = 2.0
-    ki: float = 1.0
+    ki: float = 3.0
     step_scale: float = Field(default=1.0, gt=0, le=1)
     loss_probability: float = Field(default=0.0, ge=0, lt=1)
     delay_rounds: int = Field(default=0, ge=0)
