@@ -46,6 +46,7 @@ from tether.recurrent._problem import UNREACHABLE, Problem
 EPS = 1e-6
 SCALE = 1_000_000  # max-flow capacities are x* scaled to integers
 NESTED = 3
+CREEP = 0  # added to every positive capacity (0 disables)
 
 
 @dataclass
@@ -69,7 +70,6 @@ def reduce_dominated(problem: Problem) -> np.ndarray:
     for _ in range(3):
         changed = False
         aa = a & alive[None, :] & alive[:, None]
-        deg = aa.sum(axis=1)
         closed = aa | np.eye(n, dtype=bool)
         inter = aa.astype(np.int32) @ closed.T.astype(np.int32)  # |N(v) & N[u]|
         for v in range(1, n):
@@ -216,6 +216,7 @@ class DirectedCutModel:
     ) -> list[tuple[np.ndarray, int]]:
         """Max-flow separation of (4) with nested and back cuts."""
         cap = np.round(np.clip(x, 0, 1) * SCALE).astype(np.int64)
+        cap[cap > 0] += CREEP  # creep flow: among minimum cuts prefer few arcs
         yv = np.concatenate([[1.0], y])
         targets = np.argsort(-yv)
         cuts: list[tuple[np.ndarray, int]] = []
