@@ -1,0 +1,119 @@
+"""Safety invariants of strategy ``connectivity`` under bounded random pulls.
+
+In each of the three scenes of the paper (empty space, town, office; small
+versions so that 100 seeds per scene run in seconds) five robots start in the
+safe set and are pulled by bounded random external forces (a random direction
+and magnitude per robot, redrawn every second). After every control step we
+check, with oracles independent of the strategy's own bookkeeping:
+
+* lambda2 of the weighted graph stays above ``lambda2_min``;
+* no two robots are closer than ``Rc`` (all pairs, brute force);
+* no robot is closer than ``Ro`` to an obstacle point, and no link with a
+  positive weight has a line of sight closer than ``Ro`` to an obstacle
+  point (exact point-segment distances to every obstacle point nearby).
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from tether.continuous.connectivity import ObstacleIndex, compute_weights, fiedler_pair
+from tether.continuous.placement import safe_team
+from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.geometry import point_segment_distance
+from tether.sim import StepContext, TeamState
+from tether.world.world import World
+
+SEEDS_PER_SCENE = 100
+BLOCK = 25
+STEPS = 40
+DT_S = 0.1
+N_ROBOTS = 5
+
+SCENES = {
+    # scene: (scene parameters, Table 2 preset, pull magnitude in N, start heights)
+    "empty": ({"size_m": (30.0, 30.0), "height_m": 10.0, "resolution_m": 0.75}, "outdoor", 8.0,
+              (2.0, 8.0)),
+    "town": ({"size_m": (30.0, 30.0), "height_m": 10.0, "resolution_m": 0.5}, "outdoor", 8.0,
+             (1.0, 6.0)),
+    "office": ({"resolution_m": 0.1}, "office", 4.0, (0.6, 2.4)),
+}  # fmt: skip
+
+
+@cache
+def obstacle_index(name: str) -> ObstacleIndex:
+    return ObstacleIndex.from_world(scene(name))
+
+
+@cache
+def scene(name: str) -> World:
+    from tether.world.scenes import make_scene
+
+    return make_scene(name, 7, **SCENES[name][0])
+
+
+def params(name: str) -> ConnectivityStrategyParams:
+    _, preset, magnitude, _ = SCENES[name]
+    return ConnectivityStrategyParams(
+        preset=preset, external={"kind": "random", "magnitude_n": magnitude, "hold_s": 1.0}
+    )
+
+
+def check_invariants(
+    q: np.ndarray, name: str, tree: cKDTree | None, p: ConnectivityStrategyParams
+) -> dict[str, float]:
+    """Independent checks; returns the margins."""
+    c = p.connectivity()
+    world = scene(name)
+    d = np.linalg.norm(q[:, None] - q[None], axis=-1)[np.triu_indices(len(q), 1)]
+    graph = compute_weights(q, c, obstacle_index(name))
+    lam = fiedler_pair(graph)[0]
+    out = {"lambda2": lam, "distance": float(d.min()), "clearance": np.inf, "los": np.inf}
+    if tree is not None:
+        out["clearance"] = float(tree.query(q)[0].min())
+        pts = world.obstacle_points
+        pairs, _ = graph.active()
+        for a, b in pairs:
+            mid, half = (q[a] + q[b]) / 2, np.linalg.norm(q[a] - q[b]) / 2
+            near = pts[tree.query_ball_point(mid, half + c.ro_m + 1e-9)]
+            if len(near):
+                rep = np.repeat
+                dist = point_segment_distance(near, rep(q[a:a + 1], len(near), 0),
+                                              rep(q[b:b + 1], len(near), 0))  # fmt: skip
+                out["los"] = min(out["los"], float(dist.min()))
+    return out
+
+
+@pytest.mark.parametrize("block", range(SEEDS_PER_SCENE // BLOCK))
+@pytest.mark.parametrize("name", list(SCENES))
+def test_random_pulls_keep_the_invariants(name: str, block: int) -> None:
+    world = scene(name)
+    p = params(name)
+    c = p.connectivity()
+    pts = world.obstacle_points
+    tree = cKDTree(pts) if len(pts) else None
+    worst = {"lambda2": np.inf, "distance": np.inf, "clearance": np.inf, "los": np.inf}
+    stretched = 0
+    for seed in range(block * BLOCK, (block + 1) * BLOCK):
+        rng = np.random.default_rng(seed)
+        q0 = safe_team(world, N_ROBOTS, c, rng, margin_m=3.0 if name != "office" else 1.0,
+                       height_m=SCENES[name][3])  # fmt: skip
+        strategy = ConnectivityStrategy(p)
+        state = TeamState.at_rest(q0)
+        strategy.reset(world, state, rng)
+        for k in range(STEPS):
+            state = strategy.step(StepContext(k, k * DT_S, DT_S, world, state, None, rng))
+            m = check_invariants(state.positions, name, tree, p)
+            for key in worst:
+                worst[key] = min(worst[key], m[key])
+        d = np.linalg.norm(state.positions[:, None] - state.positions[None], axis=-1)
+        stretched += int(d.max() > 2 * c.rs_inner_m)
+    assert worst["lambda2"] > c.lambda2_min, worst
+    assert worst["distance"] > c.rc_m, worst
+    assert worst["clearance"] > c.ro_m, worst
+    assert worst["los"] > c.ro_m, worst
+    assert stretched > 0  # the pulls did pull the teams apart
