@@ -220,7 +220,7 @@ def check_configuration(
     (III) every non-ready robot's previous goal is in ``Q^t``;
     (IV) non-ready robots not in ``connected`` keep their goal. With an
     assignment also: every vertex of ``Q`` gets a robot, no two robots share
-    a vertex, and all assigned goals plus ``b`` and ``fixed`` are connected.
+    a vertex other than ``b``, and all assigned goals plus ``b`` and ``fixed`` are connected.
     """
     q = set(vertices)
     fixed_set = set(fixed)
@@ -250,7 +250,7 @@ def check_configuration(
             if assignment is not None and r not in conn and assignment.get(r, goal) != goal:
                 out.append(f"(IV): non-connected robot {r!r} was re-assigned")
     if assignment is not None:
-        goals = list(assignment.values())
+        goals = [g for g in assignment.values() if g != base]  # robots may wait at b
         if len(set(goals)) != len(goals):
             out.append("deployment: two robots share a goal")
         missing = q - set(goals)
