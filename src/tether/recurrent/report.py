@@ -237,6 +237,8 @@ def make_report(
                 f" out-of-comm {s['out_of_comm_mean_steps']:.0f} wall {s['wall_time_s']:.1f}s",
                 flush=True,
             )
+    previous = out / "report.json"  # merge with earlier invocations (other settings/maps)
+    old = json.loads(previous.read_text()) if previous.exists() else {}
     report: dict[str, Any] = {
         "runs": runs,
         "steps": steps,
@@ -264,7 +266,9 @@ def make_report(
                 "constraint_violations": int(sum(s.get("constraint_violations", 0) for s in ss)),
                 "wall_time_mean_s": float(np.mean([s["wall_time_s"] for s in ss])),
             }
-        report["maps"][m] = entry
+        report["maps"][m] = {**old.get("maps", {}).get(m, {}), **entry}
+    for m, entry in old.get("maps", {}).items():
+        report["maps"].setdefault(m, entry)
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     _figures(out, maps, chosen, runs, thetas)
     return report
