@@ -6,9 +6,6 @@ full experiment is ``tether.recurrent.report.make_report``.
 
 from __future__ import annotations
 
-import importlib
-import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -18,39 +15,6 @@ from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, rand
 from tether.recurrent.replanning import RecurrentStrategy
 
 MAPS = Path(__file__).parents[1] / ".." / "shared" / "maps"
-
-
-def _standin_deploy(nxg, base, vertices, ready, previous, cost):
-    """Hungarian stand-in used only while tether.recurrent.deployment is absent."""
-    from scipy.optimize import linear_sum_assignment
-
-    robots = sorted(set(ready) | set(previous))
-    verts = sorted(set(vertices) | set(previous.values()))
-    c = np.array([[cost[r][v] for v in verts] for r in robots]).reshape(len(robots), -1)
-    ri, ci = linear_sum_assignment(np.where(np.isfinite(c), c, 1e9))
-    assignment = {robots[i]: verts[j] for i, j in zip(ri, ci, strict=True)}
-    left = [r for r in robots if r not in assignment]
-    taken = set(assignment.values()) | {base}
-    adj = sorted({u for v in taken for u in nxg.neighbors(v)} - taken)
-    fake = set()
-    if left and adj:
-        c = np.array([[cost[r][v] for v in adj] for r in left])
-        ri, ci = linear_sum_assignment(np.where(np.isfinite(c), c, 1e9))
-        for i, j in zip(ri, ci, strict=True):
-            assignment[left[i]] = adj[j]
-            fake.add(adj[j])
-    return types.SimpleNamespace(assignment=assignment, fake=fake)
-
-
-@pytest.fixture(autouse=True)
-def deployment(monkeypatch):
-    try:
-        importlib.import_module("tether.recurrent.deployment")
-    except ModuleNotFoundError:
-        mod = types.ModuleType("tether.recurrent.deployment")
-        mod.deploy = _standin_deploy
-        monkeypatch.setitem(sys.modules, "tether.recurrent.deployment", mod)
-    yield
 
 
 def office(seed: int, size=(12.0, 20.0)) -> np.ndarray:

@@ -210,7 +210,8 @@ class RecurrentStrategy:
         )
         planning_time = time.perf_counter() - tic
         if self.check:
-            previous = {int(r): int(goal_v[r]) for r in range(sim.n)}
+            # the BS vertex is always part of the network: robots waiting there need no goal
+            previous = {int(r): int(goal_v[r]) for r in range(sim.n) if goal_v[r] != 0}
             problems = check_configuration(
                 nxg,
                 0,
@@ -218,7 +219,7 @@ class RecurrentStrategy:
                 utilities.keys(),
                 len(ready_ids),
                 fixed=fixed,
-                assignment=assignment,
+                assignment={r: v for r, v in assignment.items() if v != 0},
                 previous_goals=previous,
                 ready=ready_ids.tolist(),
                 connected=[int(r) for r in movable if not ready[r]],
@@ -274,14 +275,25 @@ class RecurrentStrategy:
         dist: np.ndarray,
         row: dict[int, int],
     ) -> tuple[dict[int, int], set[int]]:
-        """Sec. V deployment via :mod:`tether.recurrent.deployment`."""
-        from tether.recurrent.deployment import deploy
+        """Sec. V deployment (:func:`tether.recurrent.deployment.optimal_deployment`)."""
+        from tether.recurrent.deployment import optimal_deployment
 
-        cost = {int(r): {v: float(dist[row[int(r)], v]) for v in range(graph.n)} for r in movable}
         ready_set = {int(r) for r in ready_ids}
-        previous = {int(r): int(goal_v[r]) for r in movable if int(r) not in ready_set}
-        out = deploy(nxg, 0, conf.vertices, sorted(ready_set), previous, cost)
-        return dict(out.assignment), set(out.fake)
+        busy = {int(r): int(goal_v[r]) for r in movable if int(r) not in ready_set}
+
+        def travel(r: int, v: int) -> float:
+            return float(dist[row[int(r)], v])
+
+        out = optimal_deployment(
+            nxg,
+            0,
+            conf.vertices,
+            sorted(ready_set),
+            travel,
+            connected_busy=busy,
+            fixed=conf.fixed,
+        )
+        return {int(r): int(v) for r, v in out.assignment.items()}, set(out.fake_frontiers)
 
     def _bind(
         self,

@@ -228,7 +228,10 @@ def make_report(
                 )
     summaries: dict[tuple[str, str, int], dict[str, Any]] = {}
     with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
-        futures = {pool.submit(run_one, *args): (m, label, k) for m, label, k, args in jobs}
+        # submit the importable function (not ``__main__.run_one``) so workers can unpickle it
+        from tether.recurrent.report import run_one as job
+
+        futures = {pool.submit(job, *args): (m, label, k) for m, label, k, args in jobs}
         for fut, key in futures.items():
             summaries[key] = fut.result()
             s = summaries[key]
