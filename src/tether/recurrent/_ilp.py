@@ -46,6 +46,7 @@ from tether.recurrent._problem import UNREACHABLE, Problem
 EPS = 1e-6
 SCALE = 1_000_000  # max-flow capacities are x* scaled to integers
 NESTED = 3
+CONFLICT_SIZE = 0  # frontier conflict rows up to this size; 0 = off (measured: no gain)
 CREEP = 0  # added to every positive capacity (0 disables)
 
 
@@ -124,6 +125,7 @@ class DirectedCutModel:
         self.out_arcs = [np.flatnonzero(tail == v) for v in range(n)]
         # reverse arc of each arc (or -1 for root arcs)
         pair = {(int(t), int(h)): a for a, (t, h) in enumerate(zip(tail, head, strict=True))}
+        self.conflicts: list[np.ndarray] = []
         self.rev = np.array(
             [pair.get((int(h), int(t)), -1) for t, h in zip(tail, head, strict=True)]
         )
@@ -159,6 +161,11 @@ class DirectedCutModel:
                 vals.append(np.append(-np.ones(len(self.out_arcs[v])), 1.0))
                 lo.append(-inf)
                 hi.append(0.0)
+        for group in self.conflicts:  # frontier sets no tree within budget can hold
+            cols.append(np.array([self.ycol(int(v)) for v in group]))
+            vals.append(np.ones(len(group)))
+            lo.append(-inf)
+            hi.append(float(len(group) - 1))
         return cols, vals, lo, hi
 
     def cut_row(self, arcs: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -263,6 +270,37 @@ class DirectedCutModel:
 # ---------------------------------------------------------------- drivers
 
 
+def frontier_conflicts(problem: Problem, keep: np.ndarray, max_size: int) -> list[np.ndarray]:
+    """Minimal sets of 2..max_size frontiers whose Steiner tree with b exceeds the budget.
+
+    ``sum_{f in S} y_f <= |S| - 1`` is then valid: such frontiers never share
+    a configuration. The Steiner costs come from the shared DP of APX.
+    Returned as keep-indexed vertex arrays.
+    """
+    from tether.recurrent._apx import SharedSteiner
+
+    budget = problem.budget
+    fr = problem.frontiers
+    fr = fr[problem.dist[0, fr] <= budget]
+    if len(fr) < 2:
+        return []
+    dp = SharedSteiner(problem.dist, fr, budget, max_size)
+    dp.top_costs(np.flatnonzero(dp.alive[dp.delta]))
+    pos = {int(v): i for i, v in enumerate(keep)}
+    out = []
+    for s in range(2, dp.delta + 1):
+        combos = dp.levels.combos[s]
+        # minimal: all subsets feasible (alive), the set itself infeasible
+        bad = np.flatnonzero(dp.alive[s] & (dp.costs[s] > budget))
+        if s == 2:  # pairs beyond the lower bound are not alive but still conflicts
+            bad = np.flatnonzero(dp.costs[s] > budget)
+        for r in bad:
+            group = [int(v) for v in fr[combos[r]]]
+            if all(v in pos for v in group):
+                out.append(np.array([pos[v] for v in group]))
+    return out
+
+
 def _incumbent(problem: Problem, keep: np.ndarray) -> tuple[set[int], dict[int, int]] | None:
     """APX (delta = 4) on the reduced graph, as a tree with parent pointers."""
     from tether.recurrent._apx import solve_apx
@@ -304,6 +342,8 @@ def solve_ilp(
         return IlpResult({0}, 0.0, True, 0.0, {})
     keep = reduce_dominated(problem)
     model = DirectedCutModel(problem, keep)
+    if CONFLICT_SIZE >= 2:
+        model.conflicts = frontier_conflicts(problem, keep, CONFLICT_SIZE)
     hint = _incumbent(problem, keep)
     stats = {
         "n_reduced": int(model.n),
