@@ -17,6 +17,10 @@ from typing import Generic, TypeVar
 T = TypeVar("T")
 
 
+def _qualname(obj: object) -> str:
+    return f"{getattr(obj, '__module__', '?')}.{getattr(obj, '__qualname__', repr(obj))}"
+
+
 class Registry(Generic[T]):
     """A named table of factories with a helpful error for unknown names."""
 
@@ -26,8 +30,11 @@ class Registry(Generic[T]):
 
     def register(self, name: str) -> Callable[[T], T]:
         def decorator(obj: T) -> T:
-            if name in self._items and self._items[name] is not obj:
-                raise ValueError(f"{self.kind} {name!r} is already registered")
+            old = self._items.get(name)
+            if old is not None and old is not obj and _qualname(old) != _qualname(obj):
+                raise ValueError(
+                    f"{self.kind} {name!r} is already registered by {_qualname(old)}"
+                )  # the same definition re-run (module reload, notebook) simply replaces it
             self._items[name] = obj
             return obj
 
