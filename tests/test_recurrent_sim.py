@@ -116,7 +116,7 @@ def test_yaml_scenario_writes_run_folder(tmp_path: Path) -> None:
     from tether.config import load_scenario
     from tether.runner import run as run_scenario
 
-    sc = load_scenario("recurrent_offices")
+    sc = load_scenario("recurrent_demo")
     sc.sim.max_steps = 40
     sc.team.n_robots = 3
     sc.output.figures = False
@@ -140,3 +140,35 @@ def test_params_reject_unknown_keys() -> None:
         RecurrentParams.model_validate({"thetta": 3})
     with pytest.raises(ValidationError):
         UtilityParams.model_validate({"ratio": 2.0})
+
+
+@pytest.mark.parametrize(
+    "name", ["recurrent_grass", "recurrent_offices", "recurrent_open", "recurrent_utility"]
+)
+def test_real_map_scenarios_are_the_papers_setting(tmp_path: Path, name: str) -> None:
+    """The shipped real-map scenarios load the shared map as the report does and run."""
+    from tether.config import load_scenario
+    from tether.recurrent.strategy import _config
+    from tether.registry import STRATEGIES
+    from tether.runner import run as run_scenario
+    from tether.world.maps import load_map
+
+    path = Path(__file__).parents[1] / "scenarios" / f"{name}.yaml"
+    sc = load_scenario(path)
+    map_path = sc.resolve_path(sc.world.params["path"])
+    if not map_path.exists():
+        pytest.skip(f"{map_path} not found (the shared maps are test data outside the package)")
+    params = STRATEGIES.get(sc.strategy.name).Params.model_validate(sc.strategy.params)
+    cfg = _config(params, sc, sc.world.params["resolution_m"])
+    assert cfg == ExplorationConfig()  # 12 robots, 900 steps, 4 cells/step, 50/150 cells
+    sc.sim.max_steps = 12
+    sc.team.n_robots = 3
+    sc.output.figures = False
+    s = run_scenario(sc, out_dir=tmp_path / "r").summary
+    assert s["map_cells"] == [800, 600] and s["steps"] == 12
+    if name != "recurrent_utility":
+        assert s["constraint_violations"] == 0
+    # same map cells and BS as run0 of tether.recurrent.report (seed 0)
+    occ = load_map(map_path, occupied_thresh=0.999, free_thresh=0.998).occupied
+    base = random_base(occ, 3, np.random.default_rng(0))
+    assert np.allclose(np.asarray(s["base_m"]) / 0.1, base)

@@ -72,6 +72,10 @@ def run(
         "min_lambda2",
         "min_links",
         "collisions",
+        "final_explored_fraction",
+        "out_of_comm_mean_steps",
+        "planning_time_mean_s",
+        "planning_time_max_s",
     ]
     for k in keys:
         if k in s:
@@ -87,16 +91,34 @@ def sweep(
         "runs/sweep"
     ),
     seeds: Annotated[int, typer.Option(help="Seeds per parameter combination.")] = 1,
+    executor: Annotated[
+        str, typer.Option(help="Where trials run: serial, processes or dask.")
+    ] = "serial",
+    workers: Annotated[
+        int | None, typer.Option(help="Processes (processes, local dask); default: all cores.")
+    ] = None,
+    address: Annotated[
+        str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
+    ] = None,
     set_: SetOpt = None,
 ) -> None:
     """Run the scenario's `sweep:` grid x seeds (resumable) and write a comparison table.
 
-    Example: tether sweep scenarios/silent_paper.yaml --out runs/fig5
+    Example: tether sweep scenarios/silent_paper.yaml --out runs/fig5 --seeds 20
+    --executor processes
     """
     from tether.experiments.sweep import run_sweep
 
     sc = _load(scenario, set_)
-    result = run_sweep(sc, out_dir, seeds=seeds, progress=lambda m: out.print(m))
+    result = run_sweep(
+        sc,
+        out_dir,
+        seeds=seeds,
+        executor=executor,
+        workers=workers,
+        address=address,
+        progress=lambda m: out.print(m),
+    )
     out.print(f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}")
     for fig in result.figures:
         out.print(f"figure: {fig}")
@@ -105,12 +127,12 @@ def sweep(
 @app.command()
 def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
     """Check a scenario (schema, strategy parameters, map, initial connectivity) without running."""
-    from tether.runner import build
+    from tether.runner import build, strategy_class, strategy_params
 
     sc = _load(scenario, set_)
-    cls = __import__("tether.runner", fromlist=["strategy_class"]).strategy_class(sc)
+    cls = strategy_class(sc)
     if hasattr(cls, "run_scenario"):
-        __import__("tether.runner", fromlist=["strategy_params"]).strategy_params(sc, cls)
+        strategy_params(sc, cls)
     else:
         build(sc)
     out.print(f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)")

@@ -86,15 +86,21 @@ def _config(params: ExplorationParams, scenario: Any, resolution_m: float) -> Ex
             f"{params.link_model!r}; expected one of: {known}"
         )
     factor = max(int(round(params.coarse_cell_m / resolution_m)), 1)
+
+    def cells(metres: float) -> float:
+        # round off float noise (0.4 / 0.1 = 4.000000000000001) so that the
+        # paper's settings give exactly the cell values of ExplorationConfig
+        return round(metres / resolution_m, 9)
+
     return ExplorationConfig(
         n_robots=scenario.team.n_robots,
         steps=scenario.sim.max_steps,
-        speed_cells=params.speed_m_s * scenario.sim.dt_s / resolution_m,
+        speed_cells=cells(params.speed_m_s * scenario.sim.dt_s),
         fov_deg=params.fov_deg,
-        sensor_range_cells=scenario.sensing.range_m / resolution_m,
+        sensor_range_cells=cells(scenario.sensing.range_m),
         sensor_resolution_deg=params.sensor_resolution_deg,
         link_model=params.link_model,
-        link_params={"range_cells": params.comm_range_m / resolution_m},
+        link_params={"range_cells": cells(params.comm_range_m)},
         coarse_factor=factor,
         scan_steps=params.scan_steps,
     )
