@@ -18,6 +18,8 @@ import numpy as np
 import pyarrow.parquet as pq
 
 from tether.config import Scenario, scenario_from_dict, set_dotted
+from tether.errors import TetherError
+from tether.experiments.executors import Trial, execute
 from tether.record import RunFolder
 
 
@@ -49,41 +51,77 @@ def trial_scenario(base: Scenario, combo: dict[str, Any]) -> Scenario:
     return scenario_from_dict(data, f"{base.source} [{combo_label(combo)}]", base.base_dir)
 
 
+def trials_of(
+    scenario: Scenario, out_dir: str | Path, seeds: int = 1
+) -> list[tuple[dict[str, Any], Trial]]:
+    """The sweep's trials, each with its grid combination, in a stable order (combos x seeds)."""
+    out = Path(out_dir)
+    trials = []
+    for combo in combinations(scenario.sweep):
+        trial = trial_scenario(scenario, combo)
+        data = trial.model_dump(mode="json")
+        for k in range(seeds):
+            seed = scenario.seed + k
+            run_dir = out / combo_label(combo) / f"seed-{seed}"
+            trials.append(
+                (combo, Trial(data, trial.source, str(trial.base_dir), seed, str(run_dir)))
+            )
+    return trials
+
+
 def run_sweep(
     scenario: Scenario,
     out_dir: str | Path,
     *,
     seeds: int = 1,
+    executor: str = "serial",
+    workers: int | None = None,
+    address: str | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> SweepResult:
-    """Run every combination of ``scenario.sweep`` for ``seeds`` seeds (sequentially)."""
-    from tether.runner import run
+    """Run every combination of ``scenario.sweep`` for ``seeds`` seeds.
 
-    out = Path(out_dir)
+    Trials whose run folder already holds ``summary.json`` are reused; the others run
+    on ``executor`` (see :mod:`tether.experiments.executors`). The table
+    ``sweep.parquet`` is written from every finished trial even when some fail; then
+    the first failure is raised as a one-line :class:`TetherError`.
+    """
+    trials = trials_of(scenario, out_dir, seeds)
+    summaries: dict[str, dict[str, Any]] = {}
+    todo = []
+    for _, trial in trials:
+        summary_file = Path(trial.run_dir) / "summary.json"
+        if summary_file.exists():
+            summaries[trial.run_dir] = json.loads(summary_file.read_text())
+        else:
+            todo.append(trial)
+    n_skipped = len(trials) - len(todo)
+    errors: list[str] = []
+    for k, outcome in enumerate(execute(todo, executor, workers=workers, address=address), 1):
+        run_dir = outcome.trial.run_dir
+        if outcome.summary is None:
+            errors.append(f"{run_dir}: {outcome.error}")
+        else:
+            summaries[run_dir] = outcome.summary
+        if progress:
+            status = "failed" if outcome.summary is None else "done"
+            progress(f"[{k}/{len(todo)}] {run_dir} {status}")
     rows: list[dict[str, Any]] = []
-    n_runs = n_skipped = 0
-    for combo in combinations(scenario.sweep):
-        trial = trial_scenario(scenario, combo)
-        for k in range(seeds):
-            seed = scenario.seed + k
-            run_dir = out / combo_label(combo) / f"seed-{seed}"
-            summary_file = run_dir / "summary.json"
-            if summary_file.exists():
-                summary = json.loads(summary_file.read_text())
-                n_skipped += 1
-            else:
-                if progress:
-                    progress(f"{combo_label(combo)} seed {seed} ...")
-                summary = run(trial, out_dir=run_dir, seed=seed, figures=False).summary
-            n_runs += 1
-            flat = {k2: v for k2, v in summary.items() if not isinstance(v, dict | list)}
-            rows.append(
-                {**{f"param:{k2}": v for k2, v in combo.items()}, **flat, "run_dir": str(run_dir)}
-            )
-    folder = RunFolder(out)
+    for combo, trial in trials:
+        if trial.run_dir not in summaries:
+            continue
+        summary = summaries[trial.run_dir]
+        flat = {k: v for k, v in summary.items() if not isinstance(v, dict | list)}
+        rows.append(
+            {**{f"param:{k}": v for k, v in combo.items()}, **flat, "run_dir": trial.run_dir}
+        )
+    folder = RunFolder(Path(out_dir))
     table = folder.write_rows("sweep.parquet", rows)
     figures = [folder.save_figure(links_figure(rows, scenario.team.n_robots), "links.png")]
-    return SweepResult(table, n_runs, n_skipped, figures)
+    if errors:
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise TetherError(f"{errors[0]}{more}; finished trials are in {table}")
+    return SweepResult(table, len(rows), n_skipped, figures)
 
 
 def links_figure(rows: list[dict[str, Any]], n_robots: int) -> Any:

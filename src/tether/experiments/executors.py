@@ -1,0 +1,118 @@
+"""Where the trials of a sweep run: in this process, in local processes, or on Dask.
+
+A trial is plain data (:class:`Trial`: the scenario as a dict, its seed and its run
+folder), so it crosses process and machine boundaries unchanged; the worker
+re-validates the scenario and calls :func:`tether.runner.run`, which writes the run
+folder atomically. Results come back as trials finish, so whatever is done is on disk
+even if a later trial fails or the sweep is killed.
+
+Executors are chosen by name (``EXECUTORS`` registry): ``serial``, ``processes``
+(``concurrent.futures`` with ``workers`` processes) and ``dask`` (a ``distributed``
+client: ``address`` of a running scheduler, e.g. ``tcp://10.0.0.5:8786`` started with
+``dask scheduler`` / ``dask worker`` on each machine, or none for a local cluster).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tether.errors import TetherError
+from tether.registry import Registry
+
+__all__ = ["EXECUTORS", "Trial", "TrialOutcome", "execute", "run_trial"]
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One run of a sweep: the scenario (validated again where it runs), seed and folder."""
+
+    scenario: dict[str, Any]
+    source: str
+    base_dir: str
+    seed: int
+    run_dir: str
+
+
+@dataclass(frozen=True)
+class TrialOutcome:
+    trial: Trial
+    summary: dict[str, Any] | None
+    error: str | None = None
+
+
+def run_trial(trial: Trial) -> TrialOutcome:
+    """Run one trial (in whatever process or machine the executor chose)."""
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    from tether.config import scenario_from_dict
+    from tether.runner import run
+
+    try:
+        scenario = scenario_from_dict(trial.scenario, trial.source, Path(trial.base_dir))
+        outcome = run(scenario, out_dir=trial.run_dir, seed=trial.seed, figures=False)
+    except TetherError as exc:  # bad input: one line, the sweep goes on with the others
+        return TrialOutcome(trial, None, str(exc))
+    return TrialOutcome(trial, outcome.summary)
+
+
+Executor = Callable[[list[Trial], int, str | None], Iterator[TrialOutcome]]
+EXECUTORS: Registry[Executor] = Registry("executor")
+
+
+@EXECUTORS.register("serial")
+def _serial(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
+    for trial in trials:
+        yield run_trial(trial)
+
+
+@EXECUTORS.register("processes")
+def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
+    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
+        pending = {pool.submit(run_trial, t) for t in trials}
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                yield future.result()
+
+
+@EXECUTORS.register("dask")
+def _dask(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise TetherError(
+            "executor 'dask' needs dask.distributed; install it with: pip install 'tether[dask]'"
+        ) from None
+    cluster = None
+    if address is None:  # a local cluster of processes, started and stopped here
+        cluster = LocalCluster(
+            n_workers=max(1, workers), threads_per_worker=1, processes=True, dashboard_address=None
+        )
+    try:
+        with Client(address or cluster) as client:
+            futures = client.map(run_trial, trials, pure=False)
+            for future in as_completed(futures):
+                yield future.result()
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def execute(
+    trials: list[Trial],
+    executor: str = "serial",
+    *,
+    workers: int | None = None,
+    address: str | None = None,
+) -> Iterator[TrialOutcome]:
+    """Run ``trials`` on the named executor, yielding each outcome as it finishes."""
+    if executor not in EXECUTORS:
+        raise TetherError(
+            f"unknown executor {executor!r}; expected one of: {', '.join(EXECUTORS.names())}"
+        )
+    n = workers if workers is not None else (os.cpu_count() or 1)
+    return EXECUTORS.get(executor)(trials, n, address)
