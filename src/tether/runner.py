@@ -61,13 +61,21 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
     params = dict(cfg.params)
     if cfg.scene == "free":
         params.setdefault("dim", cfg.dim)
+    field = "world.params"
     for key in ("path", "file"):
         if key in params:
-            params[key] = str(scenario.resolve_path(params[key]))
+            field = f"world.params.{key}"
+            resolved = scenario.resolve_path(params[key])
+            if not resolved.exists():
+                raise ScenarioError(
+                    f"{src}: {field}: {resolved}: file not found; give a path relative to "
+                    "the scenario file or an absolute one"
+                )
+            params[key] = str(resolved)
     try:
         world = make_scene(cfg.scene, rng, **params)
     except (MapError, ScenarioError) as exc:
-        raise ScenarioError(f"{src}: world.params: {exc}") from None
+        raise ScenarioError(f"{src}: {field}: {exc}") from None
     if world.dim != cfg.dim:
         raise ScenarioError(
             f"{src}: world.dim: scene {cfg.scene!r} is {world.dim}-D; set dim: {world.dim}"
