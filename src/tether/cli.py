@@ -127,12 +127,15 @@ def sweep(
 @app.command()
 def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
     """Check a scenario (schema, strategy parameters, map, initial connectivity) without running."""
-    from tether.runner import build, strategy_class, strategy_params
+    import numpy as np
+
+    from tether.runner import build, build_world, strategy_class, strategy_params
 
     sc = _load(scenario, set_)
     cls = strategy_class(sc)
-    if hasattr(cls, "run_scenario"):
+    if hasattr(cls, "run_scenario"):  # exploration strategies build their team themselves
         strategy_params(sc, cls)
+        build_world(sc, np.random.default_rng(sc.seed))
     else:
         build(sc)
     out.print(f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)")
