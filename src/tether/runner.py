@@ -191,7 +191,11 @@ def run(
     """Run one scenario and write its run folder; returns the folder and the summary."""
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
-    seed = scenario.seed if seed is None else seed
+    if seed is not None and seed != scenario.seed:  # the run folder records the seed it ran
+        source, base_dir = scenario.source, scenario.base_dir
+        scenario = scenario.model_copy(update={"seed": seed})
+        scenario._source, scenario._base_dir = source, base_dir
+    seed = scenario.seed
     cls = strategy_class(scenario)
     path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
     if hasattr(cls, "run_scenario"):  # strategies with their own loop (exploration)
