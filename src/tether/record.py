@@ -139,8 +139,14 @@ class RunFolder:
         return target
 
     def save_figure(self, fig: Any, name: str, dpi: int = 120) -> Path:
+        """Write ``fig`` as ``figures/<name>`` (atomically) and close it."""
+        import matplotlib.pyplot as plt
+
         target = self.path / "figures" / name
-        _atomic_write(target, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
+        try:
+            _atomic_write(target, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
+        finally:
+            plt.close(fig)  # long sweeps would otherwise keep every figure alive
         return target
 
 
