@@ -248,6 +248,14 @@ class ObstacleIndex:
         return cls(pts, world.dim, grid)
 
     @cached_property
+    def _centred(self) -> bool:
+        """All obstacle points are cell centres (then the grid bound is tighter)."""
+        if self.grid is None:
+            return False
+        centres = self.grid.to_world(self.grid.to_cell(self.points))
+        return bool(np.allclose(centres, self.points, rtol=0, atol=1e-9))
+
+    @cached_property
     def _half_diag_m(self) -> float:
         return 0.5 * self.grid.resolution_m * np.sqrt(self.dim) if self.grid is not None else 0.0
 
@@ -261,8 +269,11 @@ class ObstacleIndex:
         pts = a[:, None, :] + s[None, :, None] * (b - a)[:, None, :]
         clear = grid.clearance_m(pts.reshape(-1, self.dim)).reshape(len(a), -1).min(axis=1)
         spacing = length / (len(s) - 1)
-        # query point to its cell centre, obstacle point to its cell centre, sample spacing
-        return clear - 2.0 * self._half_diag_m - 0.5 * spacing
+        # ||x - o|| >= DF(c(x)) - |x - c(x)| - |o - c(o)|: half a cell diagonal for the
+        # sample x, another for the obstacle point o unless o is a cell centre; plus half
+        # the sample spacing for segment points between samples
+        margin = (1.0 if self._centred else 2.0) * self._half_diag_m
+        return clear - margin - 0.5 * spacing
 
     def segment_clearance(
         self, a: np.ndarray, b: np.ndarray, within_m: float
