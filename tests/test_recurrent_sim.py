@@ -172,3 +172,31 @@ def test_real_map_scenarios_are_the_papers_setting(tmp_path: Path, name: str) ->
     occ = load_map(map_path, occupied_thresh=0.999, free_thresh=0.998).occupied
     base = random_base(occ, 3, np.random.default_rng(0))
     assert np.allclose(np.asarray(s["base_m"]) / 0.1, base)
+
+
+def test_report_runs_identical_settings_once(tmp_path: Path) -> None:
+    """``apx_t12_instant`` and ``theta12`` are one setting: one run folder, same numbers."""
+    from PIL import Image
+
+    from tether.recurrent.report import make_report
+
+    img = np.full((80, 100, 3), 255, np.uint8)  # white free, black walls
+    img[[0, -1], :] = img[:, [0, -1]] = 0
+    img[40, 10:70] = 0
+    Image.fromarray(img).save(tmp_path / "tiny.png")
+    rep = make_report(
+        tmp_path / "out",
+        maps=("tiny",),
+        runs=1,
+        steps=8,
+        n_robots=2,
+        thetas=(12,),
+        settings=("apx_t12_instant", "theta12"),
+        maps_dir=tmp_path,
+        workers=1,
+    )
+    e = rep["maps"]["tiny"]
+    assert e["apx_t12_instant"] == e["theta12"]
+    assert sorted(p.name for p in (tmp_path / "out" / "runs" / "tiny").iterdir()) == ["theta12"]
+    for fig in ("fig4_tiny.png", "fig5.png", "fig6.png"):
+        assert (tmp_path / "out" / fig).exists()

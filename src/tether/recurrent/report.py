@@ -85,6 +85,18 @@ def plot_map(sim: Any, result: Any) -> Any:
 
 
 # ---------------------------------------------------------------------- runs
+def _run_dir(out: Path, m: str, label: str, settings: dict[str, dict[str, Any]], k: int) -> Path:
+    """Run folder of ``label``; settings identical to an earlier one share its runs.
+
+    ``apx_t12_instant`` (Fig. 4b) and ``theta12`` (Figs. 5-6) are the same
+    setting; with the same seed the simulation is deterministic, so it runs once
+    (under ``theta12``).
+    """
+    same = [name for name, s in settings.items() if s == settings[label]]
+    canonical = same[-1]  # theta<k> labels come after the Fig. 4 ones
+    return out / "runs" / m / canonical / f"run{k}"
+
+
 def _settings(thetas: tuple[int, ...]) -> dict[str, dict[str, Any]]:
     out: dict[str, dict[str, Any]] = {
         "apx_t12_timed": {"kind": "recurrent", "theta": 12, "method": "apx", "timed": True},
@@ -222,7 +234,7 @@ def make_report(
             raise FileNotFoundError(f"{map_path}: map not found (give maps_dir)")
         for label, setting in chosen.items():
             for k in range(runs):
-                run_dir = out / "runs" / m / label / f"run{k}"
+                run_dir = _run_dir(out, m, label, all_settings, k)
                 jobs.append(
                     (m, label, k, (str(map_path), setting, k, steps, n_robots, str(run_dir), check))
                 )
@@ -231,8 +243,13 @@ def make_report(
         # submit the importable function (not ``__main__.run_one``) so workers can unpickle it
         from tether.recurrent.report import run_one as job
 
-        futures = {pool.submit(job, *args): (m, label, k) for m, label, k, args in jobs}
-        for fut, key in futures.items():
+        by_dir: dict[str, Any] = {}  # one job per run folder (shared by identical settings)
+        pending = []
+        for m, label, k, args in jobs:
+            if args[5] not in by_dir:
+                by_dir[args[5]] = pool.submit(job, *args)
+            pending.append((by_dir[args[5]], (m, label, k)))
+        for fut, key in pending:
             summaries[key] = fut.result()
             s = summaries[key]
             print(
@@ -273,12 +290,17 @@ def make_report(
     for m, entry in old.get("maps", {}).items():
         report["maps"].setdefault(m, entry)
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-    _figures(out, maps, chosen, runs, thetas)
+    _figures(out, maps, chosen, runs, thetas, all_settings)
     return report
 
 
 def _figures(
-    out: Path, maps: tuple[str, ...], chosen: dict[str, Any], runs: int, thetas: tuple[int, ...]
+    out: Path,
+    maps: tuple[str, ...],
+    chosen: dict[str, Any],
+    runs: int,
+    thetas: tuple[int, ...],
+    all_settings: dict[str, dict[str, Any]],
 ) -> None:
     import matplotlib
 
@@ -286,7 +308,7 @@ def _figures(
     import matplotlib.pyplot as plt
 
     def mean_curve(m: str, label: str) -> tuple[np.ndarray, np.ndarray]:
-        curves = np.array([_curve(out / "runs" / m / label / f"run{k}") for k in range(runs)])
+        curves = np.array([_curve(_run_dir(out, m, label, all_settings, k)) for k in range(runs)])
         return 100 * curves.mean(axis=0), 100 * curves.std(axis=0)
 
     def band(ax: Any, m: str, label: str, name: str) -> None:
@@ -308,7 +330,8 @@ def _figures(
             ax.set_title(f"{MAP_LABELS.get(m, m)}: {title}")
             ax.set_xlabel("step")
             ax.grid(alpha=0.3)
-            ax.legend()
+            if ax.lines:
+                ax.legend()
         axes[0].set_ylabel("explored area [%]")
         fig.tight_layout()
         fig.savefig(out / f"fig4_{m}.png", dpi=120)
