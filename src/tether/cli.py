@@ -76,11 +76,15 @@ def run(
         "out_of_comm_mean_steps",
         "planning_time_mean_s",
         "planning_time_max_s",
+        "min_lambda2_weighted",
+        "min_robot_distance_m",
+        "min_obstacle_clearance_m",
+        "rejected_substeps",
     ]
     for k in keys:
         if k in s:
             v = s[k]
-            out.print(f"  {k:<22} {v:.4g}" if isinstance(v, float) else f"  {k:<22} {v}")
+            out.print(f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}")
     out.print(f"results: [bold]{outcome.path}[/]")
 
 
