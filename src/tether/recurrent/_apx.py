@@ -1,14 +1,14 @@
-"""Algorithm 1 ("APX") of Banfi et al., Sec. IV-B, with one shared Steiner DP.
+"""Algorithm 1 ("APX") of Banfi et al., Sec. IV-B, with one shared, lazy Steiner DP.
 
-For every subset ``F`` of at most ``delta`` frontiers, Algorithm 1 needs the
-cost of the optimal Steiner tree on ``F + {b}`` (Step 11). Instead of one
-Dreyfus-Wagner run per subset, the subsets are processed level by level
-(size 1, 2, ..., delta) and share their tables, each subset indexed by its
-colex rank (combinatorial number system), not hashed:
+For every subset ``F`` of at most ``delta`` frontiers that Algorithm 1
+examines, it needs the cost of the optimal Steiner tree on ``F + {b}``
+(Step 11). Instead of one Dreyfus-Wagner run per subset, all subsets share
+rank-indexed DP tables (each subset indexed by its colex rank in the
+combinatorial number system, not hashed):
 
-* ``P[S][v]``: cheapest tree spanning ``S + {v}``, stored for ``|S| <= delta-2``;
+* ``P[S][v]``: cheapest tree spanning ``S + {v}``, kept for ``|S| <= delta-2``;
 * ``g[S][u]``: cheapest tree spanning ``S + {u}`` in which ``u`` splits ``S``
-  in two (the Dreyfus-Wagner merge), stored for ``|S| = delta-1``;
+  in two (the Dreyfus-Wagner merge), kept for ``|S| = delta-1``;
 * the Steiner cost of ``S + {b}`` for ``|S| = delta`` is the minimum over the
   splits ``S = A + C`` of ``min_u d(b,u) + P[A][u] + P[C][u]`` and, for the
   split with ``|A| = 1``, ``min_w g[C][w] + E[a][w]`` where
@@ -16,21 +16,29 @@ colex rank (combinatorial number system), not hashed:
   ``{b, a, w}`` (the Dreyfus-Wagner relaxation of ``P[C]`` moved to the
   other side, so no full vector is ever built for the largest subsets).
 
+The tables are filled *on demand* (:class:`LazySteiner`): a row is computed
+the first time a subset examined by Algorithm 1 needs it, so the work follows
+the subsets Algorithm 1 reaches, not all ``sum_s C(|F|, s)`` of them. The
+subsets themselves are generated lazily too (:func:`_bands`): in the order of
+genNewSubset (decreasing utility, increasing size) band by band of utility,
+so the utility bound of Step 10 stops the enumeration as well as the DP.
+
 Costs are hop counts (one robot per vertex, unit edge costs) clipped at
 ``B + 1``: every value ``<= B`` is exact, anything larger means infeasible.
-The pruning rules of the paper run before a subset's DP entry is computed:
-the closed list (a subset with an infeasible subset is infeasible; since the
-levels are processed in increasing size, checking the subsets with one
-frontier fewer suffices) and the distance lower bound of Step 6 (the
-largest shortest-path distance between two vertices of ``F + {b}``). The
-selection loop is Algorithm 1 itself: subsets ranked by decreasing utility
-and increasing size, the utility test of Step 10, the budget test of
-Step 12; then completeConfiguration (Step 20).
+Before any DP work on a subset the paper's pruning rules run: the distance
+lower bound of Step 6 (the largest shortest-path distance between two
+vertices of ``F + {b}``) and the closed list of Steps 7 and 13 (a subset
+with an infeasible subset is infeasible; since Steiner costs are monotone,
+checking the subsets with one frontier fewer suffices). The selection loop is
+Algorithm 1 itself: the utility test of Step 10, the budget test of Step 12;
+then completeConfiguration (Step 20). :class:`SharedSteiner` fills every
+table eagerly (all subsets of sizes ``< delta``) for tests and benchmarks.
 """
 
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import lru_cache
 from math import comb
@@ -41,6 +49,8 @@ from tether.recurrent._problem import Problem
 from tether.recurrent.steiner import _path_edges, dreyfus_wagner
 
 CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
+FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles
+FIRST_BAND = 1 / 64  # width of the first utility band, relative to the best subset
 
 
 @dataclass
@@ -66,14 +76,30 @@ def _relax(g: np.ndarray, dist: np.ndarray, cap: int) -> np.ndarray:
     return np.minimum(out, cap, out=out)
 
 
-class _Levels:
-    """Subsets of frontier positions ``0..k-1`` by size, in colex-rank order."""
+class _Ranker:
+    """Colex ranks (combinatorial number system) of sorted subsets of ``0..k-1``."""
 
     def __init__(self, k: int, delta: int) -> None:
         self.k = k
         self.binom = np.array(
             [[comb(i, j) for j in range(delta + 2)] for i in range(k + 1)], dtype=np.int64
         )
+
+    def count(self, s: int) -> int:
+        """Number of subsets of size ``s``, ``C(k, s)``."""
+        return int(self.binom[self.k, s])
+
+    def rank(self, combos: np.ndarray) -> np.ndarray:
+        """Colex rank of sorted subsets (rows): ``sum_j C(c_j, j+1)``."""
+        s = combos.shape[1]
+        return self.binom[combos, np.arange(1, s + 1)].sum(axis=1)
+
+
+class _Levels(_Ranker):
+    """All subsets of frontier positions ``0..k-1`` by size, in colex-rank order."""
+
+    def __init__(self, k: int, delta: int) -> None:
+        super().__init__(k, delta)
         self.combos: dict[int, np.ndarray] = {}
         for s in range(1, delta + 1):
             arr = np.array(list(itertools.combinations(range(k), s)), dtype=np.intp).reshape(-1, s)
@@ -82,17 +108,13 @@ class _Levels:
             out.setflags(write=False)
             self.combos[s] = out
 
-    def rank(self, combos: np.ndarray) -> np.ndarray:
-        """Colex rank of sorted subsets (rows): ``sum_j C(c_j, j+1)``."""
-        s = combos.shape[1]
-        return self.binom[combos, np.arange(1, s + 1)].sum(axis=1)
-
 
 @lru_cache(maxsize=32)
 def _levels(k: int, delta: int) -> _Levels:
     return _Levels(k, delta)
 
 
+@lru_cache(maxsize=16)
 def _splits(s: int) -> list[tuple[tuple[int, ...], tuple[int, ...]]]:
     """Unordered splits of positions ``0..s-1`` into ``(A, C)``, ``|A| <= |C|``."""
     out = []
@@ -105,90 +127,261 @@ def _splits(s: int) -> list[tuple[tuple[int, ...], tuple[int, ...]]]:
     return out
 
 
-class SharedSteiner:
-    """Steiner costs of ``F + {root 0}`` for subsets ``F`` of <= delta frontiers.
+class _RowStore:
+    """Rows of one rank-indexed DP table, stored only for the ranks computed so far."""
 
-    Levels ``1..delta-1`` are computed on construction; the top level
-    ``delta`` (by far the largest) on demand by :meth:`top_costs`, so that
-    Algorithm 1 only pays for the subsets it actually examines. ``costs[s]``
-    holds ``budget + 1`` for infeasible, pruned or not yet computed subsets;
-    ``alive[s]`` marks the subsets that pass the closed list and the Step 6
-    lower bound.
+    def __init__(self, count: int, width: int, dtype: type) -> None:
+        self.slot = np.full(count, -1, dtype=np.int64)
+        self.data = np.empty((0, width), dtype=dtype)
+        self.size = 0
+
+    def missing(self, ranks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distinct ranks without a row, and the index of their first occurrence."""
+        todo = np.flatnonzero(self.slot[ranks] < 0)
+        uniq, first = np.unique(ranks[todo], return_index=True)
+        return uniq, todo[first]
+
+    def add(self, ranks: np.ndarray, rows: np.ndarray) -> None:
+        need = self.size + len(ranks)
+        if need > len(self.data):
+            shape = (max(need, 2 * len(self.data), 64), self.data.shape[1])
+            grown = np.empty(shape, dtype=self.data.dtype)
+            grown[: self.size] = self.data[: self.size]
+            self.data = grown
+        self.data[self.size : need] = rows
+        self.slot[ranks] = np.arange(self.size, need)
+        self.size = need
+
+    def get(self, ranks: np.ndarray) -> np.ndarray:
+        return self.data[self.slot[ranks]]
+
+
+class LazySteiner:
+    """Steiner costs of ``F + {root 0}`` for subsets ``F`` of <= delta frontiers, on demand.
+
+    ``steiner_costs(combos)`` returns the clipped cost of each subset (rows of
+    sorted frontier positions, one size per call), ``budget + 1`` if it is
+    infeasible or pruned by Step 6 or the closed list. Costs of subsets of
+    size ``< delta`` are memoised by rank (the closed list looks them up);
+    the DP rows (``P``, ``g``, ``E``) are computed once, when first needed.
     """
 
     def __init__(self, dist: np.ndarray, frontiers: np.ndarray, budget: int, delta: int) -> None:
         self.budget = budget
         self.cap = cap = budget + 1
-        self.d = d = np.minimum(dist, cap).astype(np.int32)
+        self.dtype = np.int16 if 3 * cap < np.iinfo(np.int16).max else np.int32
+        self.d = d = np.minimum(dist, cap).astype(self.dtype)
         self.d0 = d[0]
+        self.fd = d[frontiers]  # P[{f}][v] = d(f, v)
+        self.ff = self.fd[:, frontiers]  # frontier-frontier distances (Step 6)
         k = len(frontiers)
         self.delta = delta = max(1, min(delta, k))
-        self.levels = levels = _levels(k, delta)
-        self.pmax = pmax = max(1, delta - 2)
-        self.full: dict[int, np.ndarray] = {}  # P tables (sizes <= pmax)
-        self.merged: dict[int, np.ndarray] = {}  # g table (size delta - 1 when > pmax)
+        self.ranker = _Ranker(k, delta)
+        self.pmax = max(1, delta - 2)
+        n = d.shape[0]
+        self.rows = {s: _RowStore(self.ranker.count(s), n, self.dtype) for s in range(2, delta)}
+        self.e_rows = _RowStore(k, n, self.dtype)  # E[a], built only for delta >= 3
+        self.memo = {s: np.full(self.ranker.count(s), -1, np.int32) for s in range(2, delta)}
+        self.evaluated = 0
+
+    # -------------------------------------------------------------- costs
+
+    def steiner_costs(self, combos: np.ndarray) -> np.ndarray:
+        """Clipped Steiner costs of ``F + {b}`` for the subsets ``F`` (rows of ``combos``)."""
+        s = combos.shape[1]
+        if s == 1:
+            return np.minimum(self.fd[combos[:, 0], 0], self.cap).astype(np.int32)
+        if s == self.delta:
+            return self._evaluate(combos)
+        ranks = self.ranker.rank(combos)
+        memo = self.memo[s]
+        todo = np.flatnonzero(memo[ranks] < 0)
+        if len(todo):
+            uniq, first = np.unique(ranks[todo], return_index=True)
+            memo[uniq] = self._evaluate(combos[todo[first]])
+        return memo[ranks]
+
+    def within_lower_bound(self, combos: np.ndarray) -> np.ndarray:
+        """Step 6: no two vertices of ``F + {b}`` are more than ``B`` hops apart."""
+        ok = self.fd[combos, 0].max(axis=1) <= self.budget
+        for i, j in itertools.combinations(range(combos.shape[1]), 2):
+            ok &= self.ff[combos[:, i], combos[:, j]] <= self.budget
+        return ok
+
+    def closed_list_ok(self, combos: np.ndarray) -> np.ndarray:
+        """Steps 7 and 13: every subset with one frontier fewer is feasible."""
+        ok = np.ones(len(combos), dtype=bool)
+        if combos.shape[1] <= 2:  # singletons are covered by Step 6
+            return ok
+        for j in range(combos.shape[1]):
+            idx = np.flatnonzero(ok)
+            sub = np.delete(combos[idx], j, axis=1)
+            ok[idx] = self.steiner_costs(sub) <= self.budget
+        return ok
+
+    def _evaluate(self, combos: np.ndarray) -> np.ndarray:
+        """Pruning (Step 6, closed list), then the DP for the survivors."""
+        out = np.full(len(combos), self.cap, dtype=np.int32)
+        ok = self.within_lower_bound(combos)
+        ok[ok] = self.closed_list_ok(combos[ok])
+        idx = np.flatnonzero(ok)
+        self.evaluated += len(idx)
+        for lo in range(0, len(idx), CHUNK_ROWS):
+            rows = idx[lo : lo + CHUNK_ROWS]
+            out[rows] = self._dp_cost(combos[rows])
+        return out
+
+    def _dp_cost(self, c: np.ndarray) -> np.ndarray:
+        """Steiner cost of ``S + {b}`` from the DP tables (see the module docstring)."""
+        s = c.shape[1]
+        if s <= self.pmax:
+            cost = self.full(c)[:, 0]
+        elif s < self.delta:  # s == delta - 1: the merged table
+            cost = (self.merged(c) + self.d0).min(axis=1)
+        else:
+            cost = np.full(len(c), self.cap, dtype=self.dtype)
+            for pa, pc in _splits(s):
+                if len(pc) <= self.pmax:
+                    val = (self.full(c[:, pa]) + self.full(c[:, pc]) + self.d0).min(axis=1)
+                else:  # |A| = 1, |C| = delta - 1
+                    val = (self.merged(c[:, pc]) + self.e_row(c[:, pa[0]])).min(axis=1)
+                np.minimum(cost, val, out=cost)
+        return np.minimum(cost, self.cap).astype(np.int32)
+
+    # -------------------------------------------------------------- tables
+
+    def _merge(self, c: np.ndarray) -> np.ndarray:
+        """Dreyfus-Wagner merge ``g[S][u] = min_{S = A + C} P[A][u] + P[C][u]``."""
+        best = np.full((len(c), self.d.shape[0]), self.cap, dtype=self.dtype)
+        for pa, pc in _splits(c.shape[1]):
+            np.minimum(best, self.full(c[:, pa]) + self.full(c[:, pc]), out=best)
+        return np.minimum(best, self.cap, out=best)
+
+    def full(self, c: np.ndarray) -> np.ndarray:
+        """Rows ``P[S]`` (``|S| <= delta - 2``), computing the missing ones."""
+        s = c.shape[1]
+        if s == 1:
+            return self.fd[c[:, 0]]
+        store = self.rows[s]
+        ranks = self.ranker.rank(c)
+        uniq, first = store.missing(ranks)
+        if len(uniq):
+            store.add(uniq, _relax(self._merge(c[first]), self.d, self.cap))
+        return store.get(ranks)
+
+    def merged(self, c: np.ndarray) -> np.ndarray:
+        """Rows ``g[S]`` (``|S| = delta - 1``), computing the missing ones."""
+        store = self.rows[c.shape[1]]
+        ranks = self.ranker.rank(c)
+        uniq, first = store.missing(ranks)
+        if len(uniq):
+            store.add(uniq, self._merge(c[first]))
+        return store.get(ranks)
+
+    def e_row(self, a: np.ndarray) -> np.ndarray:
+        """Rows ``E[a][w] = min_u d(b,u) + d(a,u) + d(u,w)`` for frontier positions ``a``."""
+        uniq, first = self.e_rows.missing(a)
+        if len(uniq):
+            self.e_rows.add(uniq, _relax(self.fd[uniq] + self.d0, self.d, self.cap))
+        return self.e_rows.get(a)
+
+
+class SharedSteiner(LazySteiner):
+    """:class:`LazySteiner` filled eagerly, for tests and benchmarks.
+
+    Levels ``1..delta-1`` are computed for every subset on construction; the
+    top level ``delta`` (by far the largest) by :meth:`top_costs`. ``costs[s]``
+    (indexed by colex rank, as ``levels.combos[s]``) holds ``budget + 1`` for
+    infeasible, pruned or not yet computed subsets; ``alive[s]`` marks the
+    subsets that pass the closed list and the Step 6 lower bound.
+    """
+
+    def __init__(self, dist: np.ndarray, frontiers: np.ndarray, budget: int, delta: int) -> None:
+        super().__init__(dist, frontiers, budget, delta)
+        self.levels = _levels(len(frontiers), self.delta)
         self.costs: dict[int, np.ndarray] = {}
         self.alive: dict[int, np.ndarray] = {}
-        self.evaluated = k
-        fd = d[frontiers]  # (k, n)
-        self.full[1] = fd
-        self.costs[1] = fd[:, 0].copy()
-        self.alive[1] = self.costs[1] <= budget
-        self.e_table: np.ndarray | None = None
-        n = d.shape[0]
-        for s in range(2, delta + 1):
-            combos = levels.combos[s]
-            ok = np.ones(len(combos), dtype=bool)
-            for j in range(s):  # closed list: all subsets with one frontier fewer feasible
-                ok &= self.costs[s - 1][levels.rank(np.delete(combos, j, axis=1))] <= budget
-            if s == 2:  # Step 6 lower bound (for s >= 3 the closed list implies it)
-                ok &= d[frontiers[combos[:, 0]], frontiers[combos[:, 1]]] <= budget
-            self.alive[s] = ok
-            self.costs[s] = np.full(len(combos), cap, dtype=np.int32)
-            if s == delta:
-                if any(len(pc) > pmax for _, pc in _splits(s)):
-                    self.e_table = _relax(fd + self.d0[None, :], d, cap)  # E[a][w]
-                break
-            idx = np.flatnonzero(ok)
-            self.evaluated += len(idx)
-            g = np.full((len(combos), n), cap, dtype=np.int32)
-            for lo in range(0, len(idx), CHUNK_ROWS):
-                rows = idx[lo : lo + CHUNK_ROWS]
-                c = combos[rows]
-                best = np.full((len(rows), n), cap, dtype=np.int32)
-                for pa, pc in _splits(s):
-                    a = self.full[len(pa)][levels.rank(c[:, pa])]
-                    b = self.full[len(pc)][levels.rank(c[:, pc])]
-                    np.minimum(best, a + b, out=best)
-                g[rows] = np.minimum(best, cap)
-            if s <= pmax:
-                self.full[s] = _relax(g, d, cap)
-                self.costs[s][idx] = self.full[s][idx, 0]
+        for s, combos in self.levels.combos.items():
+            alive = self.within_lower_bound(combos)
+            for j in range(s if s > 1 else 0):
+                alive &= self.costs[s - 1][self.levels.rank(np.delete(combos, j, axis=1))] <= budget
+            self.alive[s] = alive
+            if s < self.delta:
+                self.costs[s] = self.steiner_costs(combos)
             else:
-                self.merged[s] = g
-                self.costs[s][idx] = np.minimum((g[idx] + self.d0).min(axis=1), cap)
+                self.costs[s] = np.full(len(combos), self.cap, dtype=np.int32)
 
     def top_costs(self, rows: np.ndarray) -> None:
         """Compute (in place) the costs of the level-``delta`` subsets ``rows``."""
-        s = self.delta
-        if s == 1 or len(rows) == 0:
+        if len(rows):
+            self.costs[self.delta][rows] = self.steiner_costs(self.levels.combos[self.delta][rows])
+
+
+# ---------------------------------------------------------------- genNewSubset
+
+
+def _subsets_in_band(uf: np.ndarray, s: int, lo: float, hi: float) -> np.ndarray:
+    """Sorted ``s``-subsets of positions with ``lo < U(F) <= hi`` (``uf`` non-increasing).
+
+    Built position by position; a prefix is extended only by the contiguous
+    range of next positions for which some completion can land in the band
+    (the ``r`` positions right after give the largest completion, the last
+    ``r`` positions the smallest). Exact band membership is decided on the
+    sums recomputed as Algorithm 1 ranks them.
+    """
+    k = len(uf)
+    if s > k:
+        return np.empty((0, s), dtype=np.intp)
+    csum = np.concatenate([[0.0], np.cumsum(uf)])
+    slack = 1e-9 * (1.0 + csum[-1])
+    pre = np.empty((1, 0), dtype=np.intp)
+    psum = np.zeros(1)
+    for t in range(s):
+        r = s - t - 1  # positions still to choose after this one
+        window = csum[r + 1 :] - csum[: k - r]  # uf[j] + the r next values, j <= k-1-r
+        tail = csum[k] - csum[k - r]  # the r smallest values
+        start = pre[:, -1] + 1 if t else np.zeros(len(pre), dtype=np.intp)
+        stop = np.searchsorted(-window, psum - lo + slack, side="left")
+        first = np.searchsorted(-uf[: k - r], psum + tail - hi - slack, side="left")
+        first = np.maximum(start, first)
+        count = np.maximum(stop - first, 0)
+        owner = np.repeat(np.arange(len(pre)), count)
+        offset = np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count)
+        nxt = first[owner] + offset
+        pre = np.column_stack([pre[owner], nxt])
+        psum = psum[owner] + uf[nxt]
+    util = uf[pre].sum(axis=1)
+    return pre[(util > lo) & (util <= hi)]
+
+
+def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.ndarray, ...]]:
+    """genNewSubset: subsets of <= ``delta`` positions, band by band of utility.
+
+    Yields ``(util, size, combos)`` (``combos`` padded with -1 to ``delta``
+    columns) ordered by decreasing utility, increasing size, then colex rank,
+    i.e. exactly the order of a global sort; bands are disjoint utility
+    intervals ``(lo, hi]`` of doubling width, so a consumer that stops early
+    (Step 10) never makes the later bands.
+    """
+    top = float(uf[:delta].sum())
+    hi, width = np.inf, top * FIRST_BAND
+    while True:
+        lo = top - width if width < top else -1.0  # utilities are > 0
+        parts = [_subsets_in_band(uf, s, lo, hi) for s in range(1, delta + 1)]
+        combos = np.full((sum(len(p) for p in parts), delta), -1, dtype=np.intp)
+        util, size, rank, at = [], [], [], 0
+        for s, p in enumerate(parts, start=1):
+            combos[at : at + len(p), :s] = p
+            at += len(p)
+            util.append(uf[p].sum(axis=1))
+            size.append(np.full(len(p), s))
+            rank.append(ranker.rank(p))
+        util_a, size_a = np.concatenate(util), np.concatenate(size)
+        order = np.lexsort((np.concatenate(rank), size_a, -util_a))
+        yield util_a[order], size_a[order], combos[order]
+        if lo < 0:
             return
-        levels, full, pmax = self.levels, self.full, self.pmax
-        self.evaluated += len(rows)
-        for lo in range(0, len(rows), CHUNK_ROWS):
-            blk = rows[lo : lo + CHUNK_ROWS]
-            c = levels.combos[s][blk]
-            best = np.full(len(blk), self.cap, dtype=np.int32)
-            for pa, pc in _splits(s):
-                if len(pc) <= pmax:
-                    a = full[len(pa)][levels.rank(c[:, pa])]
-                    b = full[len(pc)][levels.rank(c[:, pc])]
-                    val = (a + b + self.d0).min(axis=1)
-                else:  # |A| = 1, |C| = delta - 1
-                    gc = self.merged[len(pc)][levels.rank(c[:, pc])]
-                    val = (gc + self.e_table[c[:, pa[0]]]).min(axis=1)
-                np.minimum(best, val, out=best)
-            self.costs[s][blk] = np.minimum(best, self.cap)
+        hi, width = lo, 2 * width
 
 
 def solve_apx(problem: Problem, delta: int) -> ApxResult:
@@ -199,47 +392,42 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     k = len(fr)
     if k == 0 or budget == 0:
         return ApxResult({0}, 0.0, 0.0, True, 0.0, 0, 0)
-    dp = SharedSteiner(problem.dist, fr, budget, delta)
+    dp = LazySteiner(problem.dist, fr, budget, delta)
     uf = problem.utility[fr]
-    top = dp.delta
-    util = np.concatenate([uf[c].sum(axis=1) for c in dp.levels.combos.values()])
-    size = np.concatenate([np.full(len(c), s) for s, c in dp.levels.combos.items()])
-    rank = np.concatenate([np.arange(len(c)) for c in dp.levels.combos.values()])
-    alive = np.concatenate([dp.alive[s] for s in dp.levels.combos])
-    order = np.lexsort((size, -util))  # genNewSubset: decreasing utility, increasing size
-    order = order[alive[order]]  # subsets pruned by the closed list or Step 6
     dist_f = np.where(problem.dist > budget, np.inf, problem.dist).astype(float)
     z_best, tree_best, u_best = 0.0, {0}, 0.0
-    lo, block = 0, 256
-    done = False
-    while lo < len(order) and not done:
-        chunk = order[lo : lo + block]
-        lo += block
-        block *= 2
-        if util[chunk[0]] <= z_best:  # Step 10 for this and every later subset
+    for util, size, combos in _bands(uf, dp.delta, dp.ranker):
+        pos, block = 0, FIRST_BLOCK
+        while pos < len(util) and util[pos] > z_best:
+            end = pos + int(np.searchsorted(-util[pos : pos + block], -z_best, side="left"))
+            block *= 2
+            cost = np.empty(end - pos, dtype=np.int32)
+            for s in np.unique(size[pos:end]):
+                rows = np.flatnonzero(size[pos:end] == s)
+                cost[rows] = dp.steiner_costs(combos[pos + rows, :s])
+            for i in range(pos, end):
+                if util[i] <= z_best:  # Step 10
+                    break
+                if cost[i - pos] > budget:  # Steps 6, 12 and the closed list
+                    continue
+                terminals = [int(v) for v in fr[combos[i, : size[i]]]]  # Step 11
+                tree_cost, edges = dreyfus_wagner(dist_f, problem.pred, [*terminals, 0])
+                assert tree_cost == cost[i - pos], "shared DP and Dreyfus-Wagner disagree"
+                verts = {0, *terminals, *(v for e in edges for v in e)}
+                z = float(problem.utility[list(verts)].sum())
+                if z > z_best:
+                    z_best, tree_best, u_best = z, verts, float(util[i])
+            pos = end
+        if pos < len(util):  # Step 10 holds for every later subset
             break
-        dp.top_costs(rank[chunk[size[chunk] == top]])
-        for i in chunk:
-            if util[i] <= z_best:  # Step 10
-                done = True
-                break
-            s, r = int(size[i]), int(rank[i])
-            if dp.costs[s][r] > budget:  # Step 12: closed
-                continue
-            terminals = [int(v) for v in fr[dp.levels.combos[s][r]]]  # Step 11
-            cost, edges = dreyfus_wagner(dist_f, problem.pred, [*terminals, 0])
-            assert cost == dp.costs[s][r], "shared DP and Dreyfus-Wagner disagree"
-            verts = {0, *terminals, *(v for e in edges for v in e)}
-            z = float(problem.utility[list(verts)].sum())
-            if z > z_best:
-                z_best, tree_best, u_best = z, verts, float(util[i])
     verts = complete_configuration(problem, tree_best)
     utility = float(problem.utility[list(verts)].sum())
     kk = min(budget, k)
     best_possible = float(np.sort(uf)[::-1][:budget].sum())
     proven = delta >= kk or utility >= best_possible - 1e-12 * max(1.0, best_possible)
     upper = utility if proven else min(best_possible, u_best * kk / delta)
-    return ApxResult(verts, utility, u_best, proven, upper, len(util), dp.evaluated)
+    total = sum(dp.ranker.count(s) for s in range(1, dp.delta + 1))
+    return ApxResult(verts, utility, u_best, proven, upper, total, dp.evaluated + k)
 
 
 def complete_configuration(problem: Problem, tree: set[int]) -> set[int]:
