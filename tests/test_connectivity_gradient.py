@@ -159,8 +159,9 @@ def test_grid_lower_bound_is_a_true_lower_bound(dim: int, centred: bool) -> None
                       for k in range(len(a))])  # fmt: skip
     slack = exact - lower
     assert slack.min() >= -1e-12
-    # the test has teeth: one half diagonal less margin would be violated somewhere
-    assert slack.min() < obs._half_diag_m
+    # the test has teeth: dropping one half diagonal and the sample-spacing term (at
+    # most half a cell) from the margin would give a violation somewhere
+    assert slack.min() < obs._half_diag_m + 0.5 * world.grid.resolution_m
     assert (lower >= 1.75).mean() > 0.2  # and the pre-screen does skip many segments
 
 
@@ -242,12 +243,14 @@ def test_collision_cross_terms_are_needed() -> None:
     assert worst > 1e-3
 
 
-@pytest.mark.parametrize("seed", range(15))
+@pytest.mark.parametrize("seed", range(18))
 def test_lambda2_matches_networkx(seed: int) -> None:
+    """Small teams use the full ``eigh``, larger ones (> 16) the second eigenpair only."""
     rng = np.random.default_rng(seed)
     world = box_world(3, rng, boxes=6)
     obs = ObstacleIndex.from_world(world)
-    q = random_config(world, int(rng.integers(5, 15)), rng, obs)
+    n = int(rng.integers(5, 15)) if seed < 12 else int(rng.integers(17, 60))
+    q = random_config(world, n, rng, obs)
     g = compute_weights(q, PARAMS, obs)
     lam, nu = fiedler_pair(g)
     graph = nx.Graph()

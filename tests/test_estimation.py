@@ -156,3 +156,28 @@ def test_estimator_saturates_above_k3_over_k2() -> None:
     est = FiedlerEstimator.create(4, np.random.default_rng(0), params=est_params)
     est.update(graph, 4000)
     np.testing.assert_allclose(est.lambda2, est_params.saturation, rtol=1e-3)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_perfect_layer_fast_path_equals_the_message_rounds(seed: int) -> None:
+    """On a perfect layer the estimator skips the mailboxes (Laplacian products).
+
+    A layer with a failure scheduled far in the future is not ``perfect``, so
+    it runs the message-by-message rounds; both must give the same states and
+    the same message counts.
+    """
+    rng = np.random.default_rng(seed)
+    graph = compute_weights(sample_positions(rng), PARAMS)
+    fast = FiedlerEstimator.create(N, np.random.default_rng(seed), comm=CommParams())
+    slow = FiedlerEstimator.create(
+        N, np.random.default_rng(seed), comm=CommParams(failures={0: 10**9})
+    )
+    assert fast.comm.perfect and not slow.comm.perfect
+    for rounds in (1, 7, 300):
+        fast.update(graph, rounds)
+        slow.update(graph, rounds)
+    np.testing.assert_allclose(fast.state, slow.state, rtol=1e-10, atol=1e-12)
+    assert fast.comm.round == slow.comm.round == fast.rounds == 308
+    assert fast.comm.sent == slow.comm.sent and fast.comm.delivered == slow.comm.delivered
+    inbox = fast.comm.exchange(graph.active()[0], fast.state)  # mailboxes refill at once
+    assert inbox.valid.all()

@@ -100,10 +100,42 @@ class MessageLayer:
                 self._dead_from[robot] = at
         self.sent = 0
         self.delivered = 0
+        # links of the last exchange, reused while the caller passes the same array
+        self._last_pairs: np.ndarray | None = None
+        self._last_links: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def alive(self, round_: int | None = None) -> np.ndarray:
         """Boolean ``(n,)``: robots that have not failed by ``round_`` (default: now)."""
         return (self.round if round_ is None else round_) < self._dead_from
+
+    @property
+    def perfect(self) -> bool:
+        """No loss, no delay and no failure: every message arrives fresh every round."""
+        p = self.params
+        failing = any(0 <= robot < self.n for robot in p.failures)
+        return p.loss_probability == 0 and p.delay_rounds == 0 and not failing
+
+    def perfect_rounds(self, pairs: np.ndarray, rounds: int) -> None:
+        """Account for ``rounds`` rounds over ``pairs`` on a :attr:`perfect` layer.
+
+        On a perfect layer every robot holds its neighbours' current values
+        after each round, so a caller may compute a round directly from the
+        senders' values (e.g. as a Laplacian product) instead of calling
+        :meth:`exchange`; this keeps the round counter and the message counts
+        as if it had. The mailboxes are emptied: the next :meth:`exchange`
+        refills all of them (nothing is lost on a perfect layer).
+        """
+        if not self.perfect:
+            raise ValueError("perfect_rounds needs a layer without loss, delay or failures")
+        messages = 2 * len(np.asarray(pairs).reshape(-1, 2)) * rounds
+        self.sent += messages
+        self.delivered += messages
+        self.round += rounds
+        self._last_pairs = None
+        self._codes = np.empty(0, dtype=np.int64)
+        self._order = np.empty(0, dtype=np.intp)
+        self._vals = np.empty((0, 0))
+        self._sent_at = np.empty(0, dtype=np.int64)
 
     def _slots(self, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mailbox slots of ``codes`` among the current links, and whether each exists."""
@@ -131,16 +163,22 @@ class MessageLayer:
         Parameters
         ----------
         pairs
-            ``(m, 2)`` current undirected links.
+            ``(m, 2)`` current undirected links. Passing the same array object
+            again reuses the previous round's link bookkeeping, so it must not
+            be modified in place between rounds.
         values
             ``(n, k)`` what each robot sends this round.
         """
         values = np.asarray(values, dtype=float).reshape(self.n, -1)
         k = values.shape[1]
-        recv, send = directed(pairs)
-        codes = recv.astype(np.int64) * self.n + send
-        if self._vals.shape[1] != k or not np.array_equal(codes, self._codes):
-            self._relink(codes, k)
+        if pairs is self._last_pairs and self._vals.shape[1] == k:
+            recv, send, codes = self._last_links  # the same link array as last round
+        else:
+            recv, send = directed(pairs)
+            codes = recv.astype(np.int64) * self.n + send
+            if self._vals.shape[1] != k or not np.array_equal(codes, self._codes):
+                self._relink(codes, k)
+            self._last_pairs, self._last_links = pairs, (recv, send, codes)
         alive = self.alive()
         ok = alive[recv] & alive[send]
         self.sent += int(ok.sum())

@@ -135,11 +135,6 @@ class FiedlerEstimator:
         bound = p.k1 + p.k3 + p.gamma + 2 * p.k2 * deg_w.max(initial=0.0)
         bound += 2 * (p.kp + p.ki) * deg.max(initial=0)
         eps = p.step_scale / bound
-        recv_all = np.concatenate([pairs[:, 0], pairs[:, 1]])
-        e = len(recv_all)
-        # receiver-incidence matrix: (S @ z)_i = sum over i's incoming links of z
-        inc = sp.csr_matrix((np.ones(e), (recv_all, np.arange(e))), shape=(n, e))
-        w_dir = np.concatenate([w, w])
         gains = np.array(
             [[-p.k2, 0, 0, 0, 0],  # x: weighted Laplacian
              [0, -p.kp, -p.ki, 0, 0],  # y1 <- L y1, w1 <- L y1
@@ -147,6 +142,14 @@ class FiedlerEstimator:
              [0, 0, 0, -p.kp, -p.ki],
              [0, 0, 0, p.ki, 0]]
         )  # fmt: skip
+        if self.comm.perfect:
+            self._perfect_rounds(pairs, w, rounds, eps, gains)
+            return
+        recv_all = np.concatenate([pairs[:, 0], pairs[:, 1]])
+        e = len(recv_all)
+        # receiver-incidence matrix: (S @ z)_i = sum over i's incoming links of z
+        inc = sp.csr_matrix((np.ones(e), (recv_all, np.arange(e))), shape=(n, e))
+        w_dir = np.concatenate([w, w])
         for _ in range(rounds):
             inbox = self.comm.exchange(pairs, self.state)
             alive = self.comm.alive(self.comm.round - 1)
@@ -164,6 +167,39 @@ class FiedlerEstimator:
             delta[~alive] = 0.0  # a failed robot's estimator is frozen
             self.state += delta
             self.rounds += 1
+
+    def _perfect_rounds(
+        self, pairs: np.ndarray, w: np.ndarray, rounds: int, eps: float, gains: np.ndarray
+    ) -> None:
+        """The same rounds on a perfect message layer, as Laplacian products.
+
+        With every message delivered fresh, ``sum_j (z_i - z_j)`` over the
+        received values is ``(L z)_i``; the rounds are then computed from
+        two sparse Laplacians (weighted for ``x``, plain for the consensus
+        states) without materialising the messages.
+        """
+        p, n = self.params, self.n
+        rows = np.r_[pairs[:, 0], pairs[:, 1]]
+        order = np.argsort(rows, kind="stable")
+        cols = np.r_[pairs[:, 1], pairs[:, 0]][order]
+        indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=n))]
+        adj_w = sp.csr_matrix((np.r_[w, w][order], cols, indptr), shape=(n, n))
+        adj = sp.csr_matrix((np.ones(len(rows)), cols, indptr), shape=(n, n))
+        deg_w = np.bincount(rows, np.r_[w, w], n)
+        deg = np.diff(indptr).astype(float)[:, None]
+        lap = np.empty((n, 5))
+        for _ in range(rounds):
+            x, y1, _, y2, _ = self.state.T
+            lap[:, 0] = deg_w * x - adj_w @ x  # weighted Laplacian for x
+            lap[:, 1:] = deg * self.state[:, 1:] - adj @ self.state[:, 1:]
+            delta = lap @ gains
+            delta[:, 0] += -p.k1 * y1 - p.k3 * (y2 - 1.0) * x
+            delta[:, 1] += p.gamma * (x - y1)
+            delta[:, 3] += p.gamma * (x * x - y2)
+            delta *= eps
+            self.state += delta
+        self.rounds += rounds
+        self.comm.perfect_rounds(pairs, rounds)
 
     @property
     def lambda2(self) -> np.ndarray:
