@@ -163,6 +163,9 @@ def test_grid_lower_bound_is_a_true_lower_bound(dim: int, centred: bool) -> None
     # most half a cell) from the margin would give a violation somewhere
     assert slack.min() < obs._half_diag_m + 0.5 * world.grid.resolution_m
     assert (lower >= 1.75).mean() > 0.2  # and the pre-screen does skip many segments
+    two_level = obs._lower_bound(a, b, 1.75)  # coarse pass, fine pass where needed
+    assert np.all(two_level <= exact + 1e-12)
+    assert (two_level >= 1.75).mean() > 0.2
 
 
 def test_surface_points_give_the_same_clearance() -> None:

@@ -293,9 +293,28 @@ class ObstacleIndex:
         ok = np.all((cells >= 0) & (cells < shape), axis=1)
         return np.where(ok, flat[np.where(ok, cells @ strides, 0)], 0.0)
 
-    def _lower_bound(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """A lower bound of every segment's clearance from the grid's distance field."""
-        seg, pts, spacing = sample_segments(a, b, self.grid.resolution_m)
+    def _lower_bound(
+        self, a: np.ndarray, b: np.ndarray, within_m: float | None = None
+    ) -> np.ndarray:
+        """A lower bound of every segment's clearance from the grid's distance field.
+
+        With ``within_m``, a coarse pass (samples every four cells) settles the
+        segments it already puts beyond ``within_m``; only the others are
+        sampled every cell. Both passes give valid bounds.
+        """
+        if within_m is None:
+            return self._field_bound(a, b, self.grid.resolution_m)
+        bound = self._field_bound(a, b, 4.0 * self.grid.resolution_m)
+        fine = np.flatnonzero(bound < within_m)
+        if len(fine):
+            bound[fine] = np.maximum(
+                bound[fine], self._field_bound(a[fine], b[fine], self.grid.resolution_m)
+            )
+        return bound
+
+    def _field_bound(self, a: np.ndarray, b: np.ndarray, spacing_m: float) -> np.ndarray:
+        """The distance-field bound with samples at most ``spacing_m`` apart."""
+        seg, pts, spacing = sample_segments(a, b, spacing_m)
         field = np.full(len(a), np.inf)
         np.minimum.at(field, seg, self._field_at(pts))
         # ||x - o|| >= DF(c(x)) - |x - c(x)| - |o - c(o)|: half a cell diagonal for the
@@ -326,7 +345,7 @@ class ObstacleIndex:
             return dist, param, closest
         todo = np.arange(k)
         if self.grid is not None:
-            todo = todo[self._lower_bound(a, b) < within_m]
+            todo = todo[self._lower_bound(a, b, within_m) < within_m]
         if len(todo) == 0:
             return dist, param, closest
         ta, tb = a[todo], b[todo]

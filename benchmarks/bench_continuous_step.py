@@ -1,0 +1,187 @@
+"""Time one control step of strategy ``connectivity``: weights, eigenpair, gradient, update.
+
+For N = 10, 35, 100, 1000 robots, in free 3-D space and in the town scene,
+with the exact eigensolver (full ``eigh`` up to 16 robots, the second
+eigenpair only up to 400, sparse shift-invert Lanczos above) and with the
+decentralized estimator (``rounds`` communication rounds per step; on perfect
+links computed as Laplacian products, with 10 % loss through the message
+layer's mailboxes, ``estimator_loss10``, up to 100 robots). A "step" is one
+integrator sub-step:
+``compute_weights`` + eigenpair (or estimator rounds) + ``connectivity_force``
++ one semi-implicit Euler update. The safeguard's check of the candidate
+configuration is the next step's weights + eigenpair, so it is included.
+
+Usage::
+
+    python benchmarks/bench_continuous_step.py [--quick]
+
+Writes ``benchmarks/results/continuous_step.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+# One BLAS thread: for the tiny matrices of a team, OpenBLAS threading makes a 35 x 35
+# eigh cost about 16 ms instead of 0.12 ms on a 2-core machine (measured).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+
+from tether.comm import CommParams  # noqa: E402
+from tether.continuous.connectivity import (  # noqa: E402  # noqa: E402
+    ObstacleIndex,
+    compute_weights,
+    connectivity_force,
+    fiedler_pair,
+    messages,
+)
+from tether.continuous.dynamics import semi_implicit_euler  # noqa: E402
+from tether.continuous.estimation import FiedlerEstimator  # noqa: E402
+from tether.continuous.placement import safe_team  # noqa: E402
+from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
+from tether.world.scenes import make_scene  # noqa: E402
+from tether.world.world import World  # noqa: E402
+
+OUT = Path(__file__).parent / "results" / "continuous_step.json"
+
+
+def timed(fn, repeat: int) -> float:  # noqa: ANN001
+    """Median wall time of ``fn()`` in seconds."""
+    fn()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def team(world: World, n: int, params, seed: int) -> np.ndarray:  # noqa: ANN001
+    rng = np.random.default_rng(seed)
+    return safe_team(world, n, params, rng, margin_m=5.0, height_m=(1.0, 8.0))
+
+
+def bench(world: World, n: int, solver: str, rounds: int, repeat: int, loss: float = 0.0) -> dict:
+    p = ConnectivityStrategyParams()
+    c = p.connectivity()
+    q = team(world, n, c, n)
+    v = np.zeros_like(q)
+    obs = ObstacleIndex.from_world(world)
+    ext = np.zeros_like(q)
+    graph = compute_weights(q, c, obs)
+    lam, nu = fiedler_pair(graph)
+    est = None
+    if solver.startswith("estimator"):
+        comm = CommParams(loss_probability=loss)
+        est = FiedlerEstimator.create(n, np.random.default_rng(0), comm=comm)
+        est.update(graph, 200)
+
+    def weights() -> None:
+        compute_weights(q, c, obs)
+
+    def eigen() -> None:
+        fiedler_pair(graph, guess=nu)
+
+    def estimator() -> None:
+        est.update(graph, rounds)
+
+    def gradient() -> None:
+        connectivity_force(graph, lam, messages(graph, nu), c)
+
+    def step() -> None:
+        g = compute_weights(q, c, obs)
+        if est is None:
+            l2, vec = fiedler_pair(g, guess=nu)
+        else:
+            est.update(g, rounds)
+            l2, vec = est.lambda2, est.vector
+        f = connectivity_force(g, l2, messages(g, vec), c)
+        semi_implicit_euler(q, v, f + ext, 1e-3, p.mass_kg, p.damping_ns_per_m)
+
+    row = {
+        "world": world.name,
+        "n_robots": n,
+        "solver": solver,
+        "estimator_rounds_per_step": rounds if est is not None else 0,
+        "links": int(len(graph.pairs)),
+        "active_links": int((graph.weights > 0).sum()),
+        "lambda2": lam,
+        "weights_s": timed(weights, repeat),
+        "gradient_s": timed(gradient, repeat),
+        "step_s": timed(step, repeat),
+    }
+    row["eigen_s" if est is None else "estimator_s"] = timed(
+        eigen if est is None else estimator, repeat
+    )
+    return row
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats, no N = 1000")
+    args = parser.parse_args()
+    sizes = [10, 35, 100] if args.quick else [10, 35, 100, 1000]
+    worlds = {
+        "free": World(dim=3, bounds_m=np.array([[0.0, 0, 0], [200.0, 200.0, 10.0]]), name="free"),
+        "town": make_scene("town", 0, size_m=(50.0, 70.0), resolution_m=0.25),
+        # the same town with obstacle points thinned to one per 0.5 m (scene option)
+        "town_0.5m": make_scene(
+            "town", 0, size_m=(50.0, 70.0), resolution_m=0.25, point_spacing_m=0.5
+        ),
+    }
+    rows = []
+    for name, world in worlds.items():
+        world.name = name
+        for n in sizes:
+            if name.startswith("town") and n > 100:
+                continue  # 1,000 robots do not fit in the town's streets with these radii
+            for solver, rounds, loss in (
+                ("exact", 0, 0.0),
+                ("estimator", 20, 0.0),
+                ("estimator_loss10", 20, 0.1),
+            ):
+                if loss and n > 100:
+                    continue
+                repeat = 5 if n >= 1000 else (30 if args.quick else 200)
+                row = bench(world, n, solver, rounds, repeat, loss)
+                rows.append(row)
+                print(
+                    f"{name:9s} N={n:5d} {solver:16s} links={row['links']:6d} "
+                    f"weights={row['weights_s'] * 1e6:9.1f}us "
+                    f"eig/est={row.get('eigen_s', row.get('estimator_s')) * 1e6:9.1f}us "
+                    f"gradient={row['gradient_s'] * 1e6:8.1f}us step={row['step_s'] * 1e6:9.1f}us"
+                )
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    OUT.write_text(
+        json.dumps(
+            {
+                "benchmark": "continuous_step",
+                "date": dt.datetime.now(dt.timezone.utc).isoformat(),
+                "machine": {
+                    "platform": platform.platform(),
+                    "processor": platform.processor(),
+                    "cpu_count": os.cpu_count(),
+                    "python": platform.python_version(),
+                    "numpy": np.__version__,
+                    "scipy": scipy.__version__,
+                },
+                "units": "seconds (median wall time)",
+                "results": rows,
+            },
+            indent=2,
+        )
+    )
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()
