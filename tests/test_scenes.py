@@ -366,3 +366,15 @@ def test_user_points_bad_arrays_and_bounds(tmp_path: Path) -> None:
         make_scene("user_points", 0, path=str(tmp_path / "ok.npy"), bounds_m=[[0, 0, 0], [1, 1, 1]])
     with pytest.raises(MapError, match="ok.npy: bounds_m: none of the 4 points"):
         make_scene("user_points", 0, path=str(tmp_path / "ok.npy"), bounds_m=[[5, 5], [9, 9]])
+
+
+def test_seed_parameter_fixes_the_layout_independently_of_the_run_seed() -> None:
+    a = make_scene("town", 1, seed=7, size_m=(30.0, 30.0), resolution_m=0.5)
+    b = make_scene("town", 2, seed=7, size_m=(30.0, 30.0), resolution_m=0.5)
+    c = make_scene("town", 7, size_m=(30.0, 30.0), resolution_m=0.5)
+    d = make_scene("town", 1, size_m=(30.0, 30.0), resolution_m=0.5)
+    assert np.array_equal(a.grid.occupied, b.grid.occupied)
+    assert np.array_equal(a.grid.occupied, c.grid.occupied)
+    assert not np.array_equal(a.grid.occupied, d.grid.occupied)
+    with pytest.raises(ScenarioError, match="seed must be a non-negative int"):
+        make_scene("town", 1, seed=-1)

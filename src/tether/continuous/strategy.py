@@ -41,6 +41,7 @@ from tether.continuous.connectivity import (
 )
 from tether.continuous.dynamics import IntegratorParams, integrate
 from tether.continuous.estimation import EstimatorParams, FiedlerEstimator, estimate_errors
+from tether.errors import ScenarioError
 from tether.registry import STRATEGIES
 from tether.sim import StepContext, StrategyBase, TeamState
 from tether.world.world import World
@@ -194,6 +195,15 @@ def external_force(
     return f * np.minimum(1.0, spec.magnitude_n / np.maximum(norm, 1e-300))
 
 
+def _unsafe_start(lam: float, conn: ConnectivityParams) -> str:
+    return (
+        f"the initial weighted graph has lambda2 = {lam:.3g} <= lambda2_min = "
+        f"{conn.lambda2_min}: place robots within R's = {conn.rs_inner_m} m of a neighbour, "
+        f"farther than R'c = {conn.rc_outer_m} m apart and with lines of sight farther than "
+        f"R'o = {conn.ro_outer_m} m from obstacles"
+    )
+
+
 @STRATEGIES.register("connectivity")
 class ConnectivityStrategy(StrategyBase):
     """Generalized connectivity force plus an external force (eq. (1), App. A)."""
@@ -216,6 +226,15 @@ class ConnectivityStrategy(StrategyBase):
         initial_state: TeamState,
         rng: np.random.Generator,
     ) -> ConnectivityStrategy:
+        conn = params.connectivity()
+        graph = compute_weights(initial_state.positions, conn, ObstacleIndex.from_world(world))
+        lam, _ = fiedler_pair(graph)
+        if not lam > conn.lambda2_min:
+            raise ScenarioError(
+                f"{scenario.source}: team.init: {_unsafe_start(lam, conn)}"
+                + ("" if "seed" in scenario.world.params else
+                   "; the scene's layout follows the run seed unless world.params.seed is set")
+            )  # fmt: skip
         return cls(params)
 
     # ----------------------------------------------------------------- lifecycle
@@ -236,12 +255,7 @@ class ConnectivityStrategy(StrategyBase):
         graph = compute_weights(state.positions, self.conn, self.obstacles)
         lam, nu = fiedler_pair(graph)
         if not lam > self.conn.lambda2_min:
-            raise ValueError(
-                f"the initial weighted graph has lambda2 = {lam:.3g} <= lambda2_min = "
-                f"{self.conn.lambda2_min}: place robots within R's = {self.conn.rs_inner_m} m, "
-                f"farther than R'c = {self.conn.rc_outer_m} m apart and with lines of sight "
-                f"farther than R'o = {self.conn.ro_outer_m} m from obstacles"
-            )
+            raise ValueError(_unsafe_start(lam, self.conn))
         self._nu = nu
         if self.params.eigensolver == "estimator":
             e = self.params.estimator

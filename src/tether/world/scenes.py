@@ -531,8 +531,15 @@ def user_points(
 def make_scene(name: str, rng: np.random.Generator | int | None = None, **params: Any) -> World:
     """Build a registered scene by name, with one-line errors for bad names/parameters.
 
-    ``rng`` may be a Generator or a seed.
+    ``rng`` may be a Generator or a seed. A ``seed`` parameter (an int), if
+    given, replaces ``rng``: it fixes a procedural layout independently of the
+    run's seed (``world.params.seed`` in a scenario).
     """
+    seed = params.pop("seed", None)
+    if seed is not None:
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise ScenarioError(f"scene {name!r}: seed must be a non-negative int, got {seed!r}")
+        rng = seed
     if name not in SCENES:
         raise ScenarioError(
             f"scene {name!r}: unknown; expected one of: {', '.join(SCENES.names())}"
@@ -543,7 +550,7 @@ def make_scene(name: str, rng: np.random.Generator | int | None = None, **params
     if unknown:
         raise ScenarioError(
             f"scene {name!r}: unknown parameter(s) {', '.join(unknown)}; "
-            f"accepted: {', '.join(accepted)}"
+            f"accepted: {', '.join(accepted + ['seed'])}"
         )
     return factory(np.random.default_rng(rng), **params)
 
