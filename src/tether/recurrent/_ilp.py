@@ -129,6 +129,12 @@ class DirectedCutModel:
         self.rev = np.array(
             [pair.get((int(h), int(t)), -1) for t, h in zip(tail, head, strict=True)]
         )
+        # CSR layout of the arcs, fixed for every max-flow (only capacities change)
+        self.csr_order = np.lexsort((head, tail))
+        self.csr_indices = head[self.csr_order].astype(np.int32)
+        self.csr_indptr = np.concatenate([[0], np.cumsum(np.bincount(tail, minlength=n))]).astype(
+            np.int32
+        )
 
     def ycol(self, v: int) -> int:
         return self.n_arcs + v - 1
@@ -250,9 +256,14 @@ class DirectedCutModel:
         return cuts
 
     def _min_cut(self, cap: np.ndarray, t: int) -> tuple[float, np.ndarray, np.ndarray]:
-        pos = cap > 0
+        """Max-flow ``b -> t``; sink sides of the source-nearest and back cuts.
+
+        The CSR layout of the arcs is built once (zero capacities stay as
+        explicit entries), so each call only fills in the capacities.
+        """
         g = sp.csr_matrix(
-            (cap[pos].astype(np.int32), (self.tail[pos], self.head[pos])), shape=(self.n, self.n)
+            (cap[self.csr_order].astype(np.int32), self.csr_indices, self.csr_indptr),
+            shape=(self.n, self.n),
         )
         res = maximum_flow(g, 0, t, method="dinic")
         resid = (g - res.flow).tocsr()
