@@ -76,6 +76,21 @@ def validate(
             raise ValueError(f"utility of {v!r} must be finite and >= 0 (got {u!r})")
 
 
+def adjacency(graph: nx.Graph, index: Mapping[Hashable, int]) -> sp.csr_matrix:
+    """Symmetric 0/1 ``int8`` adjacency (no self-loops) in the order of ``index``."""
+    n = len(index)
+    count = 2 * graph.number_of_edges()
+    ends = np.fromiter((index[v] for e in graph.edges() for v in e), dtype=np.intp, count=count)
+    ends = ends.reshape(-1, 2)
+    ends = ends[ends[:, 0] != ends[:, 1]]
+    rows = np.concatenate([ends[:, 0], ends[:, 1]])
+    cols = np.concatenate([ends[:, 1], ends[:, 0]])
+    adj = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n, n))
+    adj.sum_duplicates()
+    adj.data[:] = 1
+    return adj
+
+
 def build(
     graph: nx.Graph,
     base: Hashable,
@@ -101,10 +116,7 @@ def build(
     budget = int(budget)
     nodes = list(graph)
     index = {v: i for i, v in enumerate(nodes)}
-    adj = nx.to_scipy_sparse_array(graph, nodelist=nodes, weight=None, format="csr")
-    adj = sp.csr_matrix(adj, dtype=np.int8)
-    adj.setdiag(0)
-    adj.eliminate_zeros()
+    adj = adjacency(graph, index)
     b = index[base]
     keep = np.ones(len(nodes), dtype=bool)
     if fixed:
