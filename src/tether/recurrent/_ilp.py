@@ -232,11 +232,14 @@ class DirectedCutModel:
         cap[cap > 0] += CREEP  # creep flow: among minimum cuts prefer few arcs
         yv = np.concatenate([[1.0], y])
         targets = np.argsort(-yv)
+        wide = self.widest_from_root(x)
         cuts: list[tuple[np.ndarray, int]] = []
         seen: set[bytes] = set()
         done = 0
         for t in targets:
             if t == 0 or yv[t] < 1e-4:
+                continue
+            if wide[t] >= yv[t]:  # one path carries y_t: max-flow >= y_t, no cut
                 continue
             if done >= max_targets:
                 break
@@ -254,6 +257,24 @@ class DirectedCutModel:
                         cuts.append((arcs, int(t)))
                 c[self.arcs_into(inside)] = SCALE  # nested: saturate and search again
         return cuts
+
+    def widest_from_root(self, x: np.ndarray) -> np.ndarray:
+        """Bottleneck capacity of the widest ``b -> v`` path for every ``v``.
+
+        A lower bound on the max-flow value ``b -> v``: sinks whose widest
+        path already carries ``y_v`` cannot violate a cut (4) and need no
+        max-flow. Bellman-Ford style ``w[v] = max_{(u,v)} min(w[u], x_uv)``.
+        """
+        wide = np.zeros(self.n)
+        wide[0] = np.inf
+        for _ in range(self.n):
+            via = np.minimum(wide[self.tail], x)
+            new = wide.copy()
+            np.maximum.at(new, self.head, via)
+            if np.array_equal(new, wide):
+                break
+            wide = new
+        return wide
 
     def _min_cut(self, cap: np.ndarray, t: int) -> tuple[float, np.ndarray, np.ndarray]:
         """Max-flow ``b -> t``; sink sides of the source-nearest and back cuts.
