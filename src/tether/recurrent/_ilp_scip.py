@@ -14,7 +14,12 @@ from pyscipopt import SCIP_PARAMSETTING, SCIP_RESULT, Conshdlr, Model, quicksum
 
 from tether.recurrent._ilp import DirectedCutModel
 
-SCIP_PARAMS: dict = {}
+SCIP_PARAMS: dict = {
+    # strong branching is most of the time of the instances that branch; capping the
+    # simplex iterations per candidate when initialising pseudocosts cut the CPU time
+    # of 10 exploration instances (seeds 0, 4, 6-13) from 31 s to 23 s, hardest 12.5 -> 6.3 s
+    "branching/relpscost/inititer": 10,
+}
 SCIP_QUIET = True
 
 
