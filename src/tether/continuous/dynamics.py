@@ -30,7 +30,10 @@ inside each control period ``dt`` by two rules:
    the new configuration keeps at least ``keep_fraction`` of the current
    margin ``lambda2 - lambda2_min``; otherwise ``h`` is halved and the
    sub-step retried (at most ``max_halvings`` times; if none is admissible
-   the team brakes to rest for the rest of the period). This is the discrete
+   the team brakes to rest for the rest of the period). The new lambda2 must
+   also exceed ``lambda2_min`` by ``lambda2_tolerance`` (1e-9): a computed
+   lambda2 at round-off level (about 1e-16 times the Laplacian's norm) does
+   not certify connectivity. This is the discrete
    counterpart of the continuous-time guarantee (App. A: under ``f_lambda``
    lambda2 never reaches ``lambda2_min``): lambda2 can approach
    ``lambda2_min`` only geometrically while the barrier force takes over.
@@ -61,6 +64,7 @@ class IntegratorParams:
     damping_ns_per_m: float = 2.0
     max_step_m: float = 0.1
     keep_fraction: float = 0.5
+    lambda2_tolerance: float = 1e-9
     max_halvings: int = 30
     max_substeps: int = 10_000
 
@@ -149,7 +153,7 @@ def integrate(
         for _ in range(params.max_halvings + 1):
             q_new, v_new = semi_implicit_euler(q, v, total, h, m, b)
             ev_new = evaluate(q_new)
-            if ev_new[0] > floor and ev_new[0] > lambda2_min:
+            if ev_new[0] > floor and ev_new[0] > lambda2_min + params.lambda2_tolerance:
                 accepted = True
                 break
             stats.rejections += 1
