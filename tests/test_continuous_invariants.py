@@ -117,3 +117,24 @@ def test_random_pulls_keep_the_invariants(name: str, block: int) -> None:
     assert worst["clearance"] > c.ro_m, worst
     assert worst["los"] > c.ro_m, worst
     assert stretched > 0  # the pulls did pull the teams apart
+
+
+def test_safeguard_rejects_a_round_off_lambda2() -> None:
+    """A candidate whose lambda2 is positive only at round-off level is not accepted."""
+    from tether.continuous.dynamics import IntegratorParams, integrate
+
+    q = np.zeros((3, 2))
+    v = np.zeros((3, 2))
+    calls = []
+
+    def evaluate(x: np.ndarray) -> tuple[float, None]:
+        calls.append(x.copy())
+        return (0.5, None) if len(calls) == 1 else (1e-16, None)
+
+    q1, v1, ev, stats = integrate(
+        q, v, 0.1, evaluate, lambda _: np.zeros((3, 2)), np.ones((3, 2)),
+        IntegratorParams(max_halvings=3), lambda2_min=0.0,
+    )  # fmt: skip
+    assert stats.stalled and stats.rejections == 4 and ev[0] == 0.5
+    np.testing.assert_array_equal(q1, q)
+    np.testing.assert_array_equal(v1, 0.0)
