@@ -149,6 +149,7 @@ def main() -> None:
     if args.worker_seed is not None:  # subprocess of --compare-src: one row as JSON
         print(json.dumps(measure(args.worker_seed, args.time_limit, args.repeats)))
         return
+    load_start = os.getloadavg()
     rows, base_rows = [], []
     for seed in range(args.instances):
         row = measure(seed, args.time_limit, args.repeats)
@@ -178,6 +179,7 @@ def main() -> None:
         "benchmark": "recurrent planning: optimal configuration (Banfi et al. Sec. IV)",
         "command": " ".join(["python", *sys.argv]),
         "conditions": args.conditions,
+        "load_average_1_5_15min": {"start": load_start, "end": os.getloadavg()},
         "machine": machine_info(),
         "settings": {"delta": 4, "time_limit_s": args.time_limit, "apx_repeats": args.repeats},
         **summarize(rows),
