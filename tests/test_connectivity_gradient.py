@@ -133,6 +133,34 @@ def test_segment_clearance_matches_brute_force(dim: int) -> None:
     np.testing.assert_allclose(np.linalg.norm(p_star - closest[near], axis=1), dist[near])
 
 
+@pytest.mark.parametrize("with_grid", [False, True])
+def test_segment_clearance_just_below_the_threshold(with_grid: bool) -> None:
+    """Segments at 0.99 within_m from one obstacle point, its foot anywhere between samples.
+
+    The nearest candidate sample is then farther than ``within_m`` from the point;
+    the search must still find it (a regression: it once queried samples only up to
+    ``within_m``).
+    """
+    within = 1.75
+    grid = None
+    point = np.zeros((1, 3))
+    if with_grid:
+        occ = np.zeros((40, 40, 40), dtype=bool)
+        occ[20, 20, 20] = True
+        grid = OccupancyGrid(occ, 0.25, np.full(3, -5.0))
+        point = grid.to_world(np.array([[20, 20, 20]]))
+    obs = ObstacleIndex(point, 3, grid)
+    a, b = [], []
+    for length in np.linspace(1.0, 6.0, 26):
+        for t in np.linspace(0.0, 1.0, 21):
+            start = point[0] + np.array([-t * length, 0.99 * within, 0.0])
+            a.append(start)
+            b.append(start + np.array([length, 0.0, 0.0]))
+    dist, param, closest = obs.segment_clearance(np.array(a), np.array(b), within)
+    np.testing.assert_allclose(dist, 0.99 * within, rtol=1e-12)
+    np.testing.assert_allclose(closest, np.repeat(point, len(a), 0))
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("centred", [True, False])
 def test_grid_lower_bound_is_a_true_lower_bound(dim: int, centred: bool) -> None:

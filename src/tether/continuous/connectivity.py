@@ -354,13 +354,16 @@ class ObstacleIndex:
         # d* <= r_seg = min(within_m, min over its samples). The closest pair (p*, o*)
         # has o* - p* orthogonal to the segment (or p* at an endpoint, a sample), and p*
         # lies within delta / 2 of a sample x: ||x - o*||^2 <= r_seg^2 + (delta / 2)^2.
+        # Nearest distances are needed exactly up to that radius (it exceeds within_m).
         seg, samples, spacing = sample_segments(ta, tb, 0.5 * within_m)
+        reach = np.sqrt(within_m**2 + (0.5 * spacing) ** 2)[seg] * (1 + 1e-9)
         near_d = np.full(len(samples), np.inf)
         ask = np.ones(len(samples), dtype=bool)
-        if self.grid is not None:  # samples the distance field puts beyond within_m
+        if self.grid is not None:  # samples the distance field puts beyond their reach
             margin = (1.0 if self._centred else 2.0) * self._half_diag_m
-            ask = self._field_at(samples) - margin < within_m
-        near_d[ask] = self.tree.query(samples[ask], distance_upper_bound=within_m)[0]
+            ask = self._field_at(samples) - margin < reach
+        if ask.any():
+            near_d[ask] = self.tree.query(samples[ask], distance_upper_bound=reach[ask].max())[0]
         upper = np.full(len(todo), within_m)
         np.minimum.at(upper, seg, near_d)
         radius = np.sqrt(upper**2 + (0.5 * spacing) ** 2)[seg] * (1 + 1e-9)
