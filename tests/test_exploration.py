@@ -127,6 +127,25 @@ def test_initial_state_and_motion_speed() -> None:
     assert np.allclose(sim.pos[0], path[-1])
 
 
+@pytest.mark.parametrize("delay", [0, 1, 3])
+def test_assignment_delay_holds_robot_that_many_steps(delay: int) -> None:
+    """Fig. 4a: a plan that took ``delay`` steps costs the robot exactly ``delay`` steps."""
+    occ = office(1)
+    sim = ExplorationSim(occ, np.array([60.0, 80.0]), Idle(), ExplorationConfig(n_robots=2))
+    coarse = sim.coarse_known()
+    src = int(coarse.node_at(sim.pos[0])[0])
+    d, pred = coarse.distances([src], predecessors=True)
+    dst = int(np.nanargmax(np.where(np.isfinite(d[0]), d[0], -1)))
+    path = coarse.path(pred[0], dst)
+    sim.assign(0, path[-1], GoalKind.RELAY, path, delay=delay)
+    start = sim.pos[0].copy()
+    for _ in range(delay):
+        sim.step()
+        assert np.allclose(sim.pos[0], start)
+    sim.step()
+    assert not np.allclose(sim.pos[0], start)
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_utility_baseline_invariants(seed: int) -> None:
     occ = office(seed)

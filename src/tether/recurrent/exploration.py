@@ -195,7 +195,10 @@ class ExplorationSim:
     def assign(
         self, robot: int, goal: np.ndarray, kind: int, path: np.ndarray, delay: int = 0
     ) -> None:
-        """Send ``robot`` along ``path`` (``(k, 2)`` waypoints ending at ``goal``)."""
+        """Send ``robot`` along ``path`` (``(k, 2)`` waypoints ending at ``goal``).
+
+        The robot stays where it is for ``delay`` steps after the current one.
+        """
         path = np.atleast_2d(np.asarray(path, dtype=float))
         if len(path) == 0:
             path = self.pos[robot : robot + 1].copy()
@@ -210,7 +213,9 @@ class ExplorationSim:
         self.scan_left[robot] = (
             self.cfg.scan_steps if (arrived and kind == GoalKind.FRONTIER) else 0
         )
-        self.wait_until[robot] = self.t + int(delay)
+        # robots move from the next step on; a plan that took ``delay`` steps
+        # (Fig. 4a) holds them ``delay`` more steps
+        self.wait_until[robot] = self.t + 1 + int(delay)
 
     def stop(self, robot: int) -> None:
         """Stop where the robot stands (its position becomes its goal)."""
