@@ -148,11 +148,12 @@ def test_set_overrides_and_validate(tmp_path):
 
 
 @pytest.mark.parametrize("name", builtin_scenarios())
-def test_every_builtin_scenario_validates_and_runs_briefly(tmp_path, name):
+def test_every_builtin_scenario_validates_and_runs_briefly(tmp_path, name, skip_without_shared_map):
     """Meta-test (as in VMAS): every shipped scenario loads, builds and runs a few steps."""
     from tether.runner import run
 
     scenario = load_scenario(name)
+    skip_without_shared_map(scenario)
     short = scenario.model_copy(update={"sim": scenario.sim.model_copy(update={"max_steps": 5})})
     short._source, short._base_dir = scenario.source, scenario.base_dir
     outcome = run(short, out_dir=tmp_path / name, figures=False)

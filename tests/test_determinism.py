@@ -30,8 +30,9 @@ def _records(path) -> dict:
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
-def test_same_seed_same_run_other_seed_other_run(tmp_path, name):
+def test_same_seed_same_run_other_seed_other_run(tmp_path, name, skip_without_shared_map):
     scenario = _short(name, 30)
+    skip_without_shared_map(scenario)
     a = run(scenario, out_dir=tmp_path / "a", seed=3, figures=False)
     b = run(scenario, out_dir=tmp_path / "b", seed=3, figures=False)
     c = run(scenario, out_dir=tmp_path / "c", seed=4, figures=False)

@@ -126,9 +126,20 @@ class Scenario(_Strict):
         return self._base_dir
 
     def resolve_path(self, value: str | Path) -> Path:
-        """A path from the scenario, relative to the scenario file's folder."""
+        """A path from the scenario: relative to the scenario file's folder, else the cwd.
+
+        The scenario's folder comes first (a scenario and its map travel together);
+        a relative path that does not exist there is looked up from the current
+        directory, so built-in scenarios can name data beside a checkout
+        (``../shared/maps/grass.png`` run from the repository root).
+        """
         p = Path(value).expanduser()
-        return p if p.is_absolute() else self._base_dir / p
+        if p.is_absolute():
+            return p
+        beside = self._base_dir / p
+        if beside.exists() or not p.exists():
+            return beside
+        return p.resolve()
 
 
 def _loc(loc: tuple[Any, ...]) -> str:

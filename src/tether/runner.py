@@ -68,8 +68,9 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
             resolved = scenario.resolve_path(params[key])
             if not resolved.exists():
                 raise ScenarioError(
-                    f"{src}: {field}: {resolved}: file not found; give a path relative to "
-                    "the scenario file or an absolute one"
+                    f"{src}: {field}: {params[key]}: file not found beside the scenario "
+                    f"({scenario.base_dir}) or from the current directory; give a path "
+                    "relative to one of them or an absolute one"
                 )
             params[key] = str(resolved)
     try:
