@@ -42,6 +42,11 @@ inside each control period ``dt`` by two rules:
    an obstacle with all its links, ``lambda2 > lambda2_min >= 0`` implies
    all three safety invariants.
 
+3. **The world's box.** When the world has bounds (the 3-D scenes: floor,
+   ceiling, outer walls), a candidate is clipped to the box shrunk by ``Ro``
+   and the velocity into the wall is zeroed (:func:`stay_inside`) before the
+   safeguard checks it, so robots neither sink below the floor nor leave the map.
+
 The check uses the exact lambda2 of the candidate configuration, which the
 next sub-step's force computation reuses, so a sub-step costs one weight
 evaluation and one eigen-decomposition when it is accepted.
@@ -83,6 +88,22 @@ def semi_implicit_euler(
     return q + h * v_new, v_new
 
 
+def stay_inside(
+    q_old: np.ndarray, q_new: np.ndarray, v_new: np.ndarray, box: np.ndarray, margin_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The world's box is rigid: floor, ceiling and outer walls stop a robot.
+
+    Each coordinate is clipped to ``[box[0] + margin_m, box[1] - margin_m]`` and the
+    velocity component that hit the wall is zeroed (an inelastic contact). A robot
+    that starts outside that range is never pushed in, it only cannot move further out.
+    Since the box is convex, links between robots inside it stay inside it too.
+    """
+    lo = np.minimum(box[0] + margin_m, q_old)
+    hi = np.maximum(box[1] - margin_m, q_old)
+    q = np.clip(q_new, lo, hi)
+    return q, np.where(q != q_new, 0.0, v_new)
+
+
 def displacement_step(v: np.ndarray, force: np.ndarray, mass: float, delta_m: float) -> float:
     """The largest ``h`` with ``h |v_i| + h^2 |f_i| / m <= delta_m`` for every robot."""
     vmax = float(np.max(np.linalg.norm(v, axis=1), initial=0.0))
@@ -115,6 +136,8 @@ def integrate(
     params: IntegratorParams,
     lambda2_min: float,
     current: tuple[float, Any] | None = None,
+    box: np.ndarray | None = None,
+    box_margin_m: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, tuple[float, Any], IntegrationStats]:
     """Advance eq. (1) by ``dt_s`` with adaptive sub-steps.
 
@@ -135,6 +158,9 @@ def integrate(
         ``(n, dim)`` external force ``f_i`` held over the period.
     current
         ``evaluate(q)`` if already known (reused from the previous period).
+    box, box_margin_m
+        ``(2, dim)`` lower and upper corners of the world, kept ``box_margin_m``
+        away (see :func:`stay_inside`); ``None`` for unbounded space.
 
     Returns
     -------
@@ -152,6 +178,8 @@ def integrate(
         accepted = False
         for _ in range(params.max_halvings + 1):
             q_new, v_new = semi_implicit_euler(q, v, total, h, m, b)
+            if box is not None:
+                q_new, v_new = stay_inside(q, q_new, v_new, box, box_margin_m)
             ev_new = evaluate(q_new)
             if ev_new[0] > floor and ev_new[0] > lambda2_min + params.lambda2_tolerance:
                 accepted = True

@@ -302,7 +302,8 @@ class ConnectivityStrategy(StrategyBase):
             f_ext = f_ext * self.estimator.comm.alive()[:, None]
         q, v, ev, stats = integrate(
             q, v, ctx.dt_s, self._evaluate, self._force, f_ext, self.integ,
-            self.conn.lambda2_min, self._current,
+            self.conn.lambda2_min, self._current, box=self.world.bounds_m,
+            box_margin_m=self.conn.ro_m,
         )  # fmt: skip
         self._current = ev
         self._stats["substeps"] += stats.substeps
