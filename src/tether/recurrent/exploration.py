@@ -217,6 +217,15 @@ class ExplorationSim:
         # (Fig. 4a) holds them ``delay`` more steps
         self.wait_until[robot] = self.t + 1 + int(delay)
 
+    def hold_steps(self, robot: int) -> int:
+        """Steps after the current one that ``robot`` still stands still.
+
+        ``0`` right after an :meth:`assign` with ``delay=0`` (the robot moves
+        at the next step, like any robot already under way), ``delay`` after
+        ``assign(..., delay=delay)``.
+        """
+        return max(int(self.wait_until[robot]) - self.t - 1, 0)
+
     def stop(self, robot: int) -> None:
         """Stop where the robot stands (its position becomes its goal)."""
         self.assign(robot, self.pos[robot].copy(), GoalKind.NONE, self.pos[robot : robot + 1])

@@ -312,7 +312,10 @@ class RecurrentStrategy:
                 continue
             goals[r] = v
             scan = sim.cfg.scan_steps if sim.goal_kind[r] == GoalKind.FRONTIER else 0
-            wait = max(sim.wait_until[r] - sim.t, 0)
+            # robots assigned by this plan move from the next step on, like the
+            # ones already under way: no extra step (it reordered P_f, see
+            # docs/recurrent.md)
+            wait = sim.hold_steps(r)
             times[r] = wait + sim.remaining_distance(r) / sim.cfg.speed_cells + scan
         targets = [r for r in assignment if r in goals]
         paths = relay_paths(goals, times, targets, graph.edges, base=0)
