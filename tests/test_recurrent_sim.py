@@ -200,3 +200,10 @@ def test_report_runs_identical_settings_once(tmp_path: Path) -> None:
     assert sorted(p.name for p in (tmp_path / "out" / "runs" / "tiny").iterdir()) == ["theta12"]
     for fig in ("fig4_tiny.png", "fig5.png", "fig6.png"):
         assert (tmp_path / "out" / fig).exists()
+    # the doc tables are computed from the same run folders
+    from tether.recurrent.report_tables import markdown
+
+    table = markdown(tmp_path / "out")
+    final = 100 * e["theta12"]["final_explored_mean"]
+    assert "| tiny | APX, (b) instantaneous |" in table
+    assert f"**{final:.1f} ± 0.0**" in table
