@@ -530,23 +530,32 @@ def compute_weights(
 # --------------------------------------------------------------------------- eigenpair
 
 
+#: Teams above this size use the sparse solvers (and the warm-started path when given a guess).
+SPARSE_MIN_N = 401
+
+
 def fiedler_pair(
     graph: WeightedGraph, *, guess: np.ndarray | None = None
 ) -> tuple[float, np.ndarray]:
-    """Exact lambda2 and unit Fiedler vector of ``G_lambda`` (LAPACK, dense).
+    """Exact lambda2 and unit Fiedler vector of ``G_lambda``.
 
     Up to 16 robots the full ``numpy.linalg.eigh``; up to 400 only the second
     eigenpair (``scipy.linalg.eigh`` with ``subset_by_index=[1, 1]``, the
-    MRRR driver ``syevr``); above, sparse shift-invert Lanczos.
+    MRRR driver ``syevr``); above, the certified warm-started inverse
+    iteration of :func:`warm_fiedler_pair` when ``guess`` is given, and
+    sparse shift-invert Lanczos (:func:`tether.graph.fiedler`) otherwise or
+    when the warm path cannot certify its answer.
 
-    ``guess`` (a previous Fiedler vector) only fixes the sign of the result,
-    so that a warm estimator or a finite-difference test sees a continuous
-    vector. For large teams use :func:`tether.graph.fiedler` with
-    ``method="sparse"`` on :meth:`WeightedGraph.active`.
+    ``guess`` (a previous Fiedler vector) fixes the sign of the result, so
+    that a warm estimator or a finite-difference test sees a continuous
+    vector, and above 400 robots it is the warm start.
     """
     if graph.n < 2:
         return 0.0, np.zeros(graph.n)
-    if graph.n > 400:
+    if graph.n >= SPARSE_MIN_N:
+        warm = warm_fiedler_pair(graph, guess) if guess is not None else None
+        if warm is not None:
+            return warm
         from tether.graph import fiedler
 
         pairs, w = graph.active()
@@ -562,6 +571,101 @@ def fiedler_pair(
     if guess is not None and float(vec @ guess) < 0:
         vec = -vec
     return lam, vec
+
+
+def warm_fiedler_pair(
+    graph: WeightedGraph,
+    guess: np.ndarray,
+    *,
+    shift_rel: float = 1e-2,
+    tol_rel: float = 1e-10,
+    max_iter: int = 12,
+    retries: int = 2,
+) -> tuple[float, np.ndarray] | None:
+    """lambda2 and Fiedler vector by inverse iteration warm-started from ``guess``, certified.
+
+    With ``x0`` the guess made zero-mean and unit, its Rayleigh quotient
+    ``theta0 = x0' L x0`` bounds lambda2 from above (Courant-Fischer on the
+    complement of the constant vector), so the shift ``tau = theta0 (1 +
+    shift_rel)`` lies above lambda2. One sparse ``L D L'`` factorization of
+    ``L - tau I`` (SuperLU with a symmetric fill-reducing ordering and
+    diagonal pivots) serves twice:
+
+    * its pivots' signs give the inertia (Sylvester's law): exactly two
+      negative pivots mean exactly the eigenvalues ``0`` and lambda2 lie
+      below ``tau``, so ``lambda3 > tau``;
+    * shifted inverse iteration on the complement of the constant vector
+      then converges to the Fiedler vector at the rate
+      ``(tau - lambda2) / (lambda3 - tau)`` per solve.
+
+    It stops when the Rayleigh quotient ``theta < tau`` and its residual
+    ``r = ||L x - theta x||`` satisfy Temple's inequality
+    ``theta - lambda2 <= r^2 / (lambda3 - theta) < r^2 / (tau - theta)
+    <= tol_rel * theta``; since also ``lambda2 <= theta``, the returned
+    ``theta`` is within ``tol_rel`` (relative) of lambda2. With more than two
+    negative pivots (``lambda3 < tau``: a small spectral gap or a poor guess)
+    the shift moves ten times closer to ``theta0`` up to ``retries`` times.
+
+    Returns
+    -------
+    (lambda2, vector) or None
+        ``None`` when the answer cannot be certified (no factorization,
+        wrong inertia, no convergence in ``max_iter`` solves, lambda2 not
+        positive); callers then use an exact solver.
+    """
+    from scipy.sparse import identity
+    from scipy.sparse.linalg import splu
+
+    from tether.graph import laplacian
+
+    n = graph.n
+    x = np.asarray(guess, dtype=float) - float(np.mean(guess))
+    norm = float(np.linalg.norm(x))
+    if n < 2 or len(x) != n or not norm > 0:
+        return None
+    x /= norm
+    pairs, w = graph.active()
+    lap = laplacian(n, pairs, w).tocsc()
+    theta0 = float(x @ (lap @ x))
+    if not theta0 > 0:
+        return None
+    eye = identity(n, format="csc")
+    rel = shift_rel
+    for _ in range(retries + 1):
+        tau = theta0 * (1.0 + rel)
+        try:
+            lu = splu(
+                (lap - tau * eye).tocsc(),
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
+        except RuntimeError:  # exactly singular
+            return None
+        pivots = lu.U.diagonal()
+        if not np.array_equal(lu.perm_r, lu.perm_c) or not np.all(np.isfinite(pivots)):
+            return None
+        negative = int(np.count_nonzero(pivots < 0))
+        if negative == 2:
+            break
+        if negative < 2:  # impossible in exact arithmetic (0 and lambda2 < tau)
+            return None
+        rel *= 0.1
+    else:
+        return None
+    v = x
+    for _ in range(max_iter):
+        y = lu.solve(v)
+        y -= y.mean()
+        v = y / np.linalg.norm(y)
+        lv = lap @ v
+        theta = float(v @ lv)
+        res = float(np.linalg.norm(lv - theta * v))
+        if 0 < theta < tau and res * res <= tol_rel * theta * (tau - theta):
+            if float(v @ guess) < 0:
+                v = -v
+            return theta, v
+    return None
 
 
 # --------------------------------------------------------------------------- gradient
