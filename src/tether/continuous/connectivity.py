@@ -248,6 +248,8 @@ class ObstacleIndex:
         self.dim = dim
         self.grid = grid if len(self.points) else None
         self.tree = cKDTree(self.points) if len(self.points) else None
+        # clearance lower bounds of recent segments: sorted keys, bound, endpoints then
+        self._cache: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @classmethod
     def from_world(cls, world: World) -> ObstacleIndex:
@@ -323,10 +325,82 @@ class ObstacleIndex:
         margin = (1.0 if self._centred else 2.0) * self._half_diag_m
         return field - margin - 0.5 * spacing
 
+    def _cached_bound(self, keys: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Lower bounds of clearance from the cache (``-inf`` where no entry).
+
+        Clearance is 1-Lipschitz in the endpoints: every point ``(1 - s) a + s b``
+        moves by at most ``max(|a - a0|, |b - b0|)``, so a bound ``c0`` of the
+        segment ``a0 -> b0`` gives ``c0 - max(|a - a0|, |b - b0|)`` for ``a -> b``.
+        Sound whatever the keys (they only choose which old segment to compare).
+        """
+        out = np.full(len(keys), -np.inf)
+        if self._cache is None or not len(self._cache[0]):
+            return out
+        ckeys, cbound, ca, cb = self._cache
+        at = np.minimum(np.searchsorted(ckeys, keys), len(ckeys) - 1)
+        hit = ckeys[at] == keys
+        at = at[hit]
+        move = np.maximum(
+            np.linalg.norm(a[hit] - ca[at], axis=1), np.linalg.norm(b[hit] - cb[at], axis=1)
+        )
+        out[hit] = cbound[at] - move
+        return out
+
+    def _store(self, keys: np.ndarray, bound: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
+        order = np.argsort(keys, kind="stable")
+        self._cache = (keys[order], bound[order], a[order].copy(), b[order].copy())
+
+    #: Cached segments are searched this much beyond the requested radius, so that their
+    #: bound stays useful until an endpoint has moved this far.
+    cache_slack_m: float = 0.25
+
+    def _cached_clearance(
+        self, a: np.ndarray, b: np.ndarray, within_m: float, keys: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`segment_clearance` settling segments from cached bounds first.
+
+        Segments whose bound (:meth:`_cached_bound`) is still ``>= within_m``
+        are beyond ``within_m``; the others are searched out to ``within_m +
+        cache_slack_m``, which gives each a new bound ``min(d*, within_m +
+        cache_slack_m)`` for later calls. Distances at or beyond ``within_m``
+        are reported as ``inf``, exactly as the uncached search does.
+        """
+        k = len(a)
+        dist = np.full(k, np.inf)
+        param = np.zeros(k)
+        closest = np.zeros((k, self.dim))
+        known = self._cached_bound(keys, a, b)
+        todo = np.flatnonzero(known < within_m)
+        reach = within_m + self.cache_slack_m
+        d, s, o = self.segment_clearance(a[todo], b[todo], reach)
+        near = d < within_m
+        dist[todo[near]], param[todo[near]], closest[todo[near]] = d[near], s[near], o[near]
+        # carried segments keep their old endpoints and bounds; searched ones start afresh
+        bound = np.empty(k)
+        new_a, new_b = a.copy(), b.copy()
+        carried = np.flatnonzero(known >= within_m)
+        if len(carried):
+            ckeys, cbound, ca, cb = self._cache
+            at = np.searchsorted(ckeys, keys[carried])
+            bound[carried], new_a[carried], new_b[carried] = cbound[at], ca[at], cb[at]
+        bound[todo] = np.minimum(d, reach)
+        self._store(keys, bound, new_a, new_b)
+        return dist, param, closest
+
     def segment_clearance(
-        self, a: np.ndarray, b: np.ndarray, within_m: float
+        self,
+        a: np.ndarray,
+        b: np.ndarray,
+        within_m: float,
+        keys: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Clearance of segments ``a[k] -> b[k]`` from ``O`` where it is below ``within_m``.
+
+        With ``keys`` (distinct integers naming the segments, e.g. robot pair
+        codes), lower bounds from the previous call with keys are reused: a
+        segment whose cached bound minus its endpoints' displacement is still
+        ``>= within_m`` is settled without any search (see
+        :meth:`_cached_bound`). The result is identical to the uncached one.
 
         Returns
         -------
@@ -343,6 +417,8 @@ class ObstacleIndex:
         closest = np.zeros((k, self.dim))
         if self.tree is None or k == 0:
             return dist, param, closest
+        if keys is not None:
+            return self._cached_clearance(a, b, within_m, np.asarray(keys, dtype=np.int64))
         todo = np.arange(k)
         if self.grid is not None:
             todo = todo[self._lower_bound(a, b, within_m) < within_m]
@@ -496,7 +572,9 @@ def compute_weights(
     clearance = np.full(len(pairs), np.inf)
     b_fac = np.ones(len(pairs))
     if obstacles is not None and len(pairs):
-        clearance, s_star, o_star = obstacles.segment_clearance(q[i], q[j], params.ro_outer_m)
+        clearance, s_star, o_star = obstacles.segment_clearance(
+            q[i], q[j], params.ro_outer_m, keys=i.astype(np.int64) * n + j
+        )
         near = np.isfinite(clearance)
         b_fac, db = smooth_step(
             np.where(near, clearance, params.ro_outer_m), params.ro_m, params.ro_outer_m
