@@ -325,7 +325,13 @@ class ObstacleIndex:
         margin = (1.0 if self._centred else 2.0) * self._half_diag_m
         return field - margin - 0.5 * spacing
 
-    def _cached_bound(self, keys: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    def _cached_bound(
+        self,
+        keys: np.ndarray,
+        a: np.ndarray,
+        b: np.ndarray,
+        cache: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None,
+    ) -> np.ndarray:
         """Lower bounds of clearance from the cache (``-inf`` where no entry).
 
         Clearance is 1-Lipschitz in the endpoints: every point ``(1 - s) a + s b``
@@ -334,9 +340,10 @@ class ObstacleIndex:
         Sound whatever the keys (they only choose which old segment to compare).
         """
         out = np.full(len(keys), -np.inf)
-        if self._cache is None or not len(self._cache[0]):
+        cache = self._cache if cache is None else cache
+        if cache is None or not len(cache[0]):
             return out
-        ckeys, cbound, ca, cb = self._cache
+        ckeys, cbound, ca, cb = cache
         at = np.minimum(np.searchsorted(ckeys, keys), len(ckeys) - 1)
         hit = ckeys[at] == keys
         at = at[hit]
@@ -369,7 +376,8 @@ class ObstacleIndex:
         dist = np.full(k, np.inf)
         param = np.zeros(k)
         closest = np.zeros((k, self.dim))
-        known = self._cached_bound(keys, a, b)
+        cache = self._cache  # one snapshot: another caller may replace it meanwhile
+        known = self._cached_bound(keys, a, b, cache)
         todo = np.flatnonzero(known < within_m)
         reach = within_m + self.cache_slack_m
         d, s, o = self.segment_clearance(a[todo], b[todo], reach)
@@ -380,7 +388,7 @@ class ObstacleIndex:
         new_a, new_b = a.copy(), b.copy()
         carried = np.flatnonzero(known >= within_m)
         if len(carried):
-            ckeys, cbound, ca, cb = self._cache
+            ckeys, cbound, ca, cb = cache
             at = np.searchsorted(ckeys, keys[carried])
             bound[carried], new_a[carried], new_b[carried] = cbound[at], ca[at], cb[at]
         bound[todo] = np.minimum(d, reach)
