@@ -48,3 +48,28 @@ def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int) -> None:
         except nx.NetworkXNoPath:
             exact = np.inf
         assert got == min(exact, budget + 1), (combo, got, exact)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_apx_with_more_frontiers_per_subset_than_robots_is_exact(seed: int) -> None:
+    """delta > budget: subsets stop at `budget` frontiers and APX is still exact (k <= delta)."""
+    from itertools import combinations
+
+    from tether.recurrent.configuration import optimal_configuration
+
+    rng = np.random.default_rng(500 + seed)
+    g = nx.random_geometric_graph(40, 0.35, seed=seed)
+    g = g.subgraph(max(nx.connected_components(g), key=len)).copy()
+    nodes = sorted(g)
+    base, budget = nodes[0], int(rng.integers(1, 4))
+    frontiers = rng.choice(nodes[1:], size=min(15, len(nodes) - 1), replace=False)
+    utilities = {int(f): float(rng.uniform(0.5, 5.0)) for f in frontiers}
+    conf = optimal_configuration(g, base, utilities, budget, method="apx", delta=4)
+    best = 0.0  # brute force over every connected set of <= budget robots
+    others = [v for v in nodes if v != base]
+    for r in range(1, budget + 1):
+        for q in combinations(others, r):
+            if nx.is_connected(g.subgraph([base, *q])):
+                best = max(best, sum(utilities.get(v, 0.0) for v in q))
+    assert conf.utility == pytest.approx(best, abs=1e-9)
+    assert conf.proven_optimal

@@ -392,7 +392,12 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     k = len(fr)
     if k == 0 or budget == 0:
         return ApxResult({0}, 0.0, 0.0, True, 0.0, 0, 0)
-    dp = LazySteiner(problem.dist, fr, budget, delta)
+    # A subset of more than `budget` frontiers needs more robots than there are: its
+    # Steiner tree has at least one vertex per frontier besides b. Enumerating such
+    # subsets only feeds the DP infeasible work (C(120, 4) = 8.2 M subsets when 3
+    # robots are ready), so the subsets stop at min(delta, budget) frontiers; the
+    # result is the same.
+    dp = LazySteiner(problem.dist, fr, budget, min(delta, budget))
     uf = problem.utility[fr]
     dist_f = np.where(problem.dist > budget, np.inf, problem.dist).astype(float)
     z_best, tree_best, u_best = 0.0, {0}, 0.0
