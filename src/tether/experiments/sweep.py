@@ -117,23 +117,46 @@ def run_sweep(
         )
     folder = RunFolder(Path(out_dir))
     table = folder.write_rows("sweep.parquet", rows)
-    figures = [folder.save_figure(links_figure(rows, scenario.team.n_robots), "links.png")]
+    figure = sweep_figure(rows, scenario.team.n_robots)
+    figures = [folder.save_figure(*figure)] if figure is not None else []
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise TetherError(f"{errors[0]}{more}; finished trials are in {table}")
     return SweepResult(table, len(rows), n_skipped, figures)
 
 
-def links_figure(rows: list[dict[str, Any]], n_robots: int) -> Any:
-    """Links over time of the first seed of each combination (e.g. the silent paper's Fig. 5)."""
-    from tether.viz.plots import links_over_time
+# per-step column -> (x column, figure name, y label); the first one a run records is drawn
+_SWEEP_FIGURES = {
+    "n_links": ("t_s", "links.png", "number of links"),
+    "explored_fraction": ("step", "explored.png", "explored fraction known at the BS"),
+}
 
+
+def sweep_figure(rows: list[dict[str, Any]], n_robots: int) -> tuple[Any, str] | None:
+    """A per-step metric of the first seed of each combination, one line per combination.
+
+    Links over time where runs record them (the silent paper's Fig. 5), else the
+    explored fraction (exploration strategies); ``None`` when runs record neither.
+    """
+    from tether.viz.plots import links_over_time, series_over_time
+
+    files = [Path(r["run_dir"]) / "steps.parquet" for r in rows]
+    files = [f for f in files if f.exists()]
+    if not files:
+        return None
+    columns = set(pq.read_schema(files[0]).names)
+    metric = next((m for m in _SWEEP_FIGURES if m in columns), None)
+    if metric is None:
+        return None
+    x_col, name, ylabel = _SWEEP_FIGURES[metric]
     series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for row in rows:
         label = combo_label({k[6:]: v for k, v in row.items() if k.startswith("param:")})
         steps_file = Path(row["run_dir"]) / "steps.parquet"
         if label in series or not steps_file.exists():
             continue
-        table = pq.read_table(steps_file, columns=["t_s", "n_links"]).to_pydict()
-        series[label] = (np.asarray(table["t_s"]), np.asarray(table["n_links"]))
-    return links_over_time(series, n_robots)
+        table = pq.read_table(steps_file, columns=[x_col, metric]).to_pydict()
+        series[label] = (np.asarray(table[x_col]), np.asarray(table[metric]))
+    if metric == "n_links":
+        return links_over_time(series, n_robots), name
+    return series_over_time(series, x_col, ylabel), name

@@ -17,19 +17,31 @@ if TYPE_CHECKING:
     from tether.runner import Built
 
 
-def links_over_time(series: dict[str, tuple[np.ndarray, np.ndarray]], n_robots: int) -> Figure:
-    """Number of links against time, one line per labelled series (the paper's Fig. 5)."""
+def series_over_time(
+    series: dict[str, tuple[np.ndarray, np.ndarray]],
+    xlabel: str,
+    ylabel: str,
+    reference: tuple[float, str] | None = None,
+) -> Figure:
+    """One line per labelled ``(x, y)`` series, with an optional horizontal reference."""
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    for label, (t, links) in series.items():
-        ax.plot(t, links, label=label)
-    ax.axhline(n_robots - 1, color="grey", ls=":", lw=1, label=f"spanning tree ({n_robots - 1})")
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("number of links")
+    for label, (x, y) in series.items():
+        ax.plot(x, y, label=label)
+    if reference is not None:
+        ax.axhline(reference[0], color="grey", ls=":", lw=1, label=reference[1])
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
+
+
+def links_over_time(series: dict[str, tuple[np.ndarray, np.ndarray]], n_robots: int) -> Figure:
+    """Number of links against time, one line per labelled series (the paper's Fig. 5)."""
+    spanning = (n_robots - 1, f"spanning tree ({n_robots - 1})")
+    return series_over_time(series, "time (s)", "number of links", spanning)
 
 
 def snapshot(
