@@ -232,8 +232,9 @@ class ConnectivityStrategy(StrategyBase):
         if not lam > conn.lambda2_min:
             raise ScenarioError(
                 f"{scenario.source}: team.init: {_unsafe_start(lam, conn)}"
-                + ("" if "seed" in scenario.world.params else
-                   "; the scene's layout follows the run seed unless world.params.seed is set")
+                + ("; the scene's layout follows the run seed unless world.params.seed is set"
+                   if world.has_obstacles and "seed" not in scenario.world.params
+                   and scenario.world.scene in ("town", "office") else "")
             )  # fmt: skip
         return cls(params)
 
