@@ -8,31 +8,11 @@ import networkx as nx
 import numpy as np
 import pytest
 
+from _exploration_helpers import Idle, farthest_known_path, office
 from tether.recurrent.baseline_utility import UtilityStrategy
 from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, GoalKind
 from tether.recurrent.knowledge import Knowledge
 from tether.recurrent.readiness import ReadinessTracker, relay_paths
-
-
-def office(seed: int = 0, size=(12.0, 16.0)) -> np.ndarray:
-    import tether.world.scenes  # noqa: F401
-    from tether.registry import SCENES
-
-    w = SCENES.get("office")(np.random.default_rng(seed), dim=2, size_m=list(size))
-    return w.grid.occupied
-
-
-class Idle:
-    name = "idle"
-
-    def start(self, sim):
-        pass
-
-    def update(self, sim):
-        pass
-
-    def metrics(self):
-        return {}
 
 
 # ---------------------------------------------------------------- knowledge
@@ -108,11 +88,7 @@ def test_initial_state_and_motion_speed() -> None:
     assert sim.connected.all()
     assert sim.knowledge.global_known.any()
     # send robot 0 along a long known path and check speed and free space
-    coarse = sim.coarse_known()
-    src = int(coarse.node_at(sim.pos[0])[0])
-    d, pred = coarse.distances([src], predecessors=True)
-    dst = int(np.nanargmax(np.where(np.isfinite(d[0]), d[0], -1)))
-    path = coarse.path(pred[0], dst)
+    path = farthest_known_path(sim, 0)
     sim.assign(0, path[-1], GoalKind.FRONTIER, path)
     prev = sim.pos[0].copy()
     for _ in range(200):
@@ -132,11 +108,7 @@ def test_assignment_delay_holds_robot_that_many_steps(delay: int) -> None:
     """Fig. 4a: a plan that took ``delay`` steps costs the robot exactly ``delay`` steps."""
     occ = office(1)
     sim = ExplorationSim(occ, np.array([60.0, 80.0]), Idle(), ExplorationConfig(n_robots=2))
-    coarse = sim.coarse_known()
-    src = int(coarse.node_at(sim.pos[0])[0])
-    d, pred = coarse.distances([src], predecessors=True)
-    dst = int(np.nanargmax(np.where(np.isfinite(d[0]), d[0], -1)))
-    path = coarse.path(pred[0], dst)
+    path = farthest_known_path(sim, 0)
     sim.assign(0, path[-1], GoalKind.RELAY, path, delay=delay)
     start = sim.pos[0].copy()
     for _ in range(delay):

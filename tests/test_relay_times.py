@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _exploration_helpers import Idle, farthest_known_path, office
 from tether.recurrent import replanning
 from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, GoalKind, random_base
 from tether.recurrent.replanning import RecurrentStrategy
@@ -22,35 +23,11 @@ from tether.recurrent.replanning import RecurrentStrategy
 MAPS = Path(__file__).parents[1] / ".." / "shared" / "maps"
 
 
-def office(seed: int, size=(12.0, 20.0)) -> np.ndarray:
-    import tether.world.scenes  # noqa: F401
-    from tether.registry import SCENES
-
-    return SCENES.get("office")(np.random.default_rng(seed), dim=2, size_m=list(size)).grid.occupied
-
-
-class Idle:
-    name = "idle"
-
-    def start(self, sim):
-        pass
-
-    def update(self, sim):
-        pass
-
-    def metrics(self):
-        return {}
-
-
 @pytest.mark.parametrize("delay", [0, 1, 3])
 def test_hold_steps_is_the_number_of_steps_standing_still(delay: int) -> None:
-    occ = office(0)
+    occ = office(0, (12.0, 20.0))
     sim = ExplorationSim(occ, np.array([60.0, 80.0]), Idle(), ExplorationConfig(n_robots=2))
-    coarse = sim.coarse_known()
-    src = int(coarse.node_at(sim.pos[0])[0])
-    d, pred = coarse.distances([src], predecessors=True)
-    dst = int(np.nanargmax(np.where(np.isfinite(d[0]), d[0], -1)))
-    path = coarse.path(pred[0], dst)
+    path = farthest_known_path(sim, 0)
     sim.assign(0, path[-1], GoalKind.RELAY, path, delay=delay)
     assert sim.hold_steps(0) == delay
     assert sim.hold_steps(1) == 0  # never assigned
@@ -68,7 +45,7 @@ def test_bound_travel_times_are_the_simulated_arrival_steps(
     seed: int, theta: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Every moving robot's travel time given to ``relay_paths`` is its arrival step."""
-    occ = office(seed)
+    occ = office(seed, (12.0, 20.0))
     cfg = ExplorationConfig(n_robots=4, steps=60)
     strat = RecurrentStrategy(theta=theta)
     sim = ExplorationSim(occ, random_base(occ, 3, np.random.default_rng(seed)), strat, cfg)
