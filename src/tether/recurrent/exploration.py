@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from scipy import ndimage
 from scipy.sparse.csgraph import connected_components
 
+from tether.graph import algebraic_connectivity
 from tether.recurrent.geodesic import CoarseGrid
 from tether.recurrent.knowledge import Knowledge
 from tether.recurrent.links import LinkModel, link_pairs
@@ -100,6 +101,8 @@ class ExplorationResult:
     metrics: dict[str, Any]
     wall_time_s: float
     timing_s: dict[str, float]
+    n_links: np.ndarray | None = None  # (T+1,) links of the robots + BS communication graph
+    lambda2: np.ndarray | None = None  # (T+1,) its unweighted algebraic connectivity
 
 
 def _reachable_free(occupied: np.ndarray, start: np.ndarray) -> np.ndarray:
@@ -189,6 +192,8 @@ class ExplorationSim:
         self._explored: list[float] = []
         self._connected_hist: list[np.ndarray] = []
         self._pos_hist: list[np.ndarray] = []
+        self._links_hist: list[int] = []
+        self._lambda2_hist: list[float] = []
         self._record()
 
     # ------------------------------------------------------------------ commands
@@ -322,6 +327,8 @@ class ExplorationSim:
         self._explored.append(np.count_nonzero(known & self.free_region) / self.free_total)
         self._connected_hist.append(self.connected.copy())
         self._pos_hist.append(self.pos.copy())
+        self._links_hist.append(len(self.links))
+        self._lambda2_hist.append(algebraic_connectivity(self.n + 1, self.links))
 
     def step(self) -> None:
         """Advance the simulation by one step."""
@@ -354,6 +361,8 @@ class ExplorationSim:
             metrics=self.strategy.metrics(),
             wall_time_s=wall_time_s,
             timing_s=dict(self.timing),
+            n_links=np.asarray(self._links_hist),
+            lambda2=np.asarray(self._lambda2_hist),
         )
 
 

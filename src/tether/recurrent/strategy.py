@@ -25,6 +25,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from tether.errors import ScenarioError
+from tether.graph import pairs_within
 from tether.recurrent.baseline_utility import UtilityStrategy
 from tether.recurrent.exploration import (
     ExplorationConfig,
@@ -114,10 +115,28 @@ def run_summary(
     seed: int,
     n_robots: int,
     dt_s: float = 1.0,
+    collision_distance_cells: float = 0.0,
 ) -> dict[str, Any]:
-    """Scalar results of an exploration run (the ``summary.json`` keys)."""
+    """Scalar results of an exploration run (the ``summary.json`` keys).
+
+    Besides the exploration metrics, the core keys of every tether run, for the
+    communication graph of the robots and the BS: ``connected_all_steps`` (every
+    robot linked to the BS at every step; recurrent connectivity allows otherwise),
+    ``min_links``, ``min_lambda2`` (unweighted) and ``collisions`` (robot pairs
+    closer than ``collision_distance_cells``, summed over steps: robots are points
+    here and do not avoid each other).
+    """
     steps = len(result.explored) - 1
     out_steps = (~result.connected[1:]).sum(axis=0) if steps else np.zeros(n_robots)
+    collisions = 0
+    if collision_distance_cells > 0:
+        collisions = sum(len(pairs_within(p, collision_distance_cells)) for p in result.positions)
+    graph = {}
+    if result.n_links is not None and result.lambda2 is not None:
+        graph = {
+            "min_links": int(result.n_links.min()),
+            "min_lambda2": float(result.lambda2.min()),
+        }
     return {
         "scenario": scenario,
         "strategy": strategy,
@@ -126,6 +145,9 @@ def run_summary(
         "sim_time_s": steps * dt_s,
         "steps": steps,
         "wall_time_s": result.wall_time_s,
+        "connected_all_steps": bool(result.connected.all()),
+        **graph,
+        "collisions": int(collisions),
         "final_explored_fraction": float(result.explored[-1]),
         "out_of_comm_mean_steps": float(np.mean(out_steps)),
         "out_of_comm_max_steps": int(np.max(out_steps)),
@@ -220,6 +242,7 @@ def _run(cls: type, strategy: Any, scenario: Any, out_dir: Path, rng: np.random.
         seed=int(scenario.seed),
         n_robots=cfg.n_robots,
         dt_s=scenario.sim.dt_s,
+        collision_distance_cells=scenario.sim.collision_distance_m / grid.resolution_m,
     )
     summary["base_m"] = (grid.origin_m + sim.base * grid.resolution_m).tolist()
     summary["map_cells"] = list(occupied.shape)
