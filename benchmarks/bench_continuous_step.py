@@ -28,7 +28,6 @@ import argparse
 import datetime as dt
 import json
 import os
-import platform
 import time
 from pathlib import Path
 
@@ -38,7 +37,6 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import numpy as np  # noqa: E402
-import scipy  # noqa: E402
 
 from tether.comm import CommParams  # noqa: E402
 from tether.continuous.connectivity import (  # noqa: E402  # noqa: E402
@@ -52,6 +50,7 @@ from tether.continuous.dynamics import semi_implicit_euler  # noqa: E402
 from tether.continuous.estimation import FiedlerEstimator  # noqa: E402
 from tether.continuous.placement import safe_team  # noqa: E402
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
+from tether.record import machine  # noqa: E402
 from tether.world.scenes import make_scene  # noqa: E402
 from tether.world.world import World  # noqa: E402
 
@@ -181,14 +180,7 @@ def main() -> None:
             {
                 "benchmark": "continuous_step",
                 "date": dt.datetime.now(dt.timezone.utc).isoformat(),
-                "machine": {
-                    "platform": platform.platform(),
-                    "processor": platform.processor(),
-                    "cpu_count": os.cpu_count(),
-                    "python": platform.python_version(),
-                    "numpy": np.__version__,
-                    "scipy": scipy.__version__,
-                },
+                "machine": machine(),
                 "units": "seconds (median wall time)",
                 "results": rows,
             },

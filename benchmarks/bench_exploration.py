@@ -13,16 +13,13 @@ times, final explored fraction.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import json
-import os
-import platform
 import sys
 from pathlib import Path
 
 import numpy as np
-import scipy
 
+from tether.record import machine
 from tether.recurrent.baseline_utility import UtilityStrategy
 from tether.recurrent.exploration import ExplorationConfig, random_base, run_exploration
 from tether.recurrent.replanning import RecurrentStrategy
@@ -87,14 +84,7 @@ def main(argv: list[str] | None = None) -> dict:
             )
     out = {
         "benchmark": "exploration simulator (recurrent connectivity, Banfi et al. 2016)",
-        "machine": {
-            "platform": platform.platform(),
-            "cpu_count": os.cpu_count(),
-            "python": platform.python_version(),
-            "numpy": np.__version__,
-            "scipy": scipy.__version__,
-            "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
-        },
+        "machine": machine(),
         "results": rows,
     }
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)

@@ -91,6 +91,32 @@ def provenance() -> dict[str, Any]:
     }
 
 
+def machine() -> dict[str, Any]:
+    """The machine a measurement ran on (recorded with benchmark and report results)."""
+    import datetime as dt
+
+    import scipy
+
+    cpu = platform.processor()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next(
+                (line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")),
+                cpu,
+            )
+    except OSError:
+        pass
+    return {
+        "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+        "platform": platform.platform(),
+        "cpu": cpu,
+        "cpu_count": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+    }
+
+
 class RunFolder:
     """Writes the files of one run atomically (see module docstring)."""
 

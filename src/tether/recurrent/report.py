@@ -23,16 +23,16 @@ times, planning times) to ``OUT_DIR/report.json``.
 
 from __future__ import annotations
 
-import datetime as dt
 import json
 import os
-import platform
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from tether.record import machine
 
 __all__ = ["make_report", "plot_map", "plot_run", "run_one"]
 
@@ -172,19 +172,6 @@ def _curve(run_dir: Path) -> np.ndarray:
     return pq.read_table(run_dir / "steps.parquet").column("explored_fraction").to_numpy()
 
 
-def _machine() -> dict[str, Any]:
-    import scipy
-
-    return {
-        "platform": platform.platform(),
-        "cpu_count": os.cpu_count(),
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
-    }
-
-
 def make_report(
     out_dir: str | Path,
     maps: tuple[str, ...] = ("grass", "offices", "open"),
@@ -263,7 +250,7 @@ def make_report(
         "runs": runs,
         "steps": steps,
         "n_robots": n_robots,
-        "machine": _machine(),
+        "machine": machine(),
         "maps": {},
     }
     for m in maps:
