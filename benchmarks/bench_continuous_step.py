@@ -39,18 +39,14 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from tether.comm import CommParams  # noqa: E402
-from tether.continuous.connectivity import (  # noqa: E402  # noqa: E402
-    ObstacleIndex,
-    compute_weights,
-    connectivity_force,
-    fiedler_pair,
-    messages,
-)
 from tether.continuous.dynamics import semi_implicit_euler  # noqa: E402
 from tether.continuous.estimation import FiedlerEstimator  # noqa: E402
+from tether.continuous.gradient import connectivity_force, messages
 from tether.continuous.placement import safe_team  # noqa: E402
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
+from tether.continuous.weights import compute_weights
 from tether.record import machine  # noqa: E402
+from tether.world.clearance import ObstacleIndex
 from tether.world.scenes import make_scene  # noqa: E402
 from tether.world.world import World  # noqa: E402
 
@@ -84,7 +80,7 @@ def bench(world: World, n: int, solver: str, rounds: int, repeat: int, loss: flo
     obs = ObstacleIndex.from_world(world)
     ext = np.zeros_like(q)
     graph = compute_weights(q, c, obs)
-    lam, nu = fiedler_pair(graph)
+    lam, nu = graph.fiedler()
     est = None
     if solver.startswith("estimator"):
         comm = CommParams(loss_probability=loss)
@@ -95,10 +91,10 @@ def bench(world: World, n: int, solver: str, rounds: int, repeat: int, loss: flo
         compute_weights(q, c, obs)
 
     def eigen() -> None:
-        fiedler_pair(graph, guess=nu)
+        graph.fiedler(guess=nu)
 
     def eigen_cold() -> None:
-        fiedler_pair(graph)
+        graph.fiedler()
 
     def estimator() -> None:
         est.update(graph, rounds)
@@ -109,7 +105,7 @@ def bench(world: World, n: int, solver: str, rounds: int, repeat: int, loss: flo
     def step() -> None:
         g = compute_weights(q, c, obs)
         if est is None:
-            l2, vec = fiedler_pair(g, guess=nu)
+            l2, vec = g.fiedler(guess=nu)
         else:
             est.update(g, rounds)
             l2, vec = est.lambda2, est.vector

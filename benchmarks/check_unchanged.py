@@ -31,6 +31,9 @@ VOLATILE = {"wall_time_s", "provenance", "timing_s", "planning_time_mean_s",
             "planning_time_max_s", "planning_times_s", "planning_time_total_s"}  # fmt: skip
 
 
+VOLATILE_COLUMNS = {"planning_time_s", "solver_time_s"}  # wall-clock times in events
+
+
 def _sha(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()[:16]
 
@@ -56,8 +59,7 @@ def fingerprint(name: str) -> dict[str, Any]:
             if f.name == "events.parquet":
                 rows = table.to_pylist()
                 out["events"] = [
-                    {k: v for k, v in r.items() if "time" not in k and v is not None}
-                    for r in rows
+                    {k: v for k, v in r.items() if "time" not in k and v is not None} for r in rows
                 ]
         return out
 
@@ -74,9 +76,11 @@ def compare(before: dict[str, Any], after: dict[str, Any]) -> list[str]:
             problems.append(f"{fname}: missing")
             continue
         for c, h in cols.items():
+            if c in VOLATILE_COLUMNS:
+                continue
             if c in new and new[c] != h:
                 problems.append(f"{fname}:{c} differs")
-        if set(cols) == set(new) and before["files"][fname] != after["files"][fname]:
+        if set(cols) == set(new) and not set(cols) & VOLATILE_COLUMNS and before["files"][fname] != after["files"][fname]:
             problems.append(f"{fname}: same columns but not byte-identical")
     eb, ea = before.get("events", []), after.get("events", [])
     if len(eb) != len(ea):

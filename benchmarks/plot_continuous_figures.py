@@ -27,13 +27,10 @@ import numpy as np  # noqa: E402
 import pyarrow.parquet as pq  # noqa: E402
 
 from tether.config import load_scenario  # noqa: E402
-from tether.continuous.connectivity import (  # noqa: E402
-    ObstacleIndex,
-    compute_weights,
-    fiedler_pair,
-)
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
+from tether.continuous.weights import compute_weights
 from tether.runner import build, run  # noqa: E402
+from tether.world.clearance import ObstacleIndex
 
 FIGURES = Path(__file__).resolve().parents[1] / "docs" / "figures"
 SCENES = ("connectivity_empty", "connectivity_office", "connectivity_town")
@@ -65,7 +62,7 @@ def main() -> None:
             if len(t) != len(pos):  # steps.parquet may hold one record fewer than robots
                 t = np.arange(len(pos)) * sc.sim.dt_s
             obs = ObstacleIndex.from_world(world)
-            lam = np.array([fiedler_pair(compute_weights(q, conn, obs))[0] for q in pos])
+            lam = np.array([compute_weights(q, conn, obs).fiedler()[0] for q in pos])
             runs[name] = (t, pos, lam, world, conn, out.summary)
             print(f"{name}: min lambda2 = {lam.min():.4f}, steps = {len(pos)}")
 

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tether.continuous.connectivity import ConnectivityParams, ObstacleIndex, compute_weights
+from tether.continuous.params import ConnectivityParams
+from tether.continuous.weights import compute_weights
 from tether.geometry import point_segment_distance
+from tether.world.clearance import ObstacleIndex
 from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 

@@ -6,21 +6,17 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.continuous.connectivity import (
-    ConnectivityParams,
-    Messages,
-    ObstacleIndex,
-    compute_weights,
-    fiedler_pair,
-    lambda2_gradient,
-    messages,
+from tether.continuous.gradient import Messages, lambda2_gradient, messages
+from tether.continuous.params import ConnectivityParams
+from tether.continuous.potential import (
     potential,
     potential_slope,
     smooth_step,
     smooth_step_log_derivative,
-    surface_points,
 )
+from tether.continuous.weights import compute_weights
 from tether.geometry import point_segment_distance
+from tether.world.clearance import ObstacleIndex, surface_points
 from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
@@ -55,7 +51,7 @@ def random_config(world: World, n: int, rng: np.random.Generator, obs: ObstacleI
 
 
 def lambda2_at(q: np.ndarray, obs: ObstacleIndex) -> float:
-    return fiedler_pair(compute_weights(q, PARAMS, obs))[0]
+    return compute_weights(q, PARAMS, obs).fiedler()[0]
 
 
 def finite_difference(q: np.ndarray, obs: ObstacleIndex, h: float = 1e-6) -> np.ndarray:
@@ -245,7 +241,7 @@ def test_gradient_matches_finite_differences(dim: int) -> None:
         obs = ObstacleIndex.from_world(world)
         q = random_config(world, int(rng.integers(5, 9)), rng, obs)
         g = compute_weights(q, PARAMS, obs)
-        lam, nu = fiedler_pair(g)
+        lam, nu = g.fiedler()
         grad = lambda2_gradient(g, messages(g, nu))
         fd = finite_difference(q, obs)
         scale = max(np.abs(fd).max(), 1e-3)
@@ -267,7 +263,7 @@ def test_collision_cross_terms_are_needed() -> None:
         g = compute_weights(q, PARAMS, obs)
         if not (g.coll_logd > 0).any():
             continue
-        lam, nu = fiedler_pair(g)
+        lam, nu = g.fiedler()
         msg = messages(g, nu)
         pair_only = lambda2_gradient(g, Messages(msg.nu, msg.collision, 0 * msg.edge_energy))
         worst = max(worst, np.abs(pair_only - finite_difference(q, obs)).max())
@@ -283,7 +279,7 @@ def test_lambda2_matches_networkx(seed: int) -> None:
     n = int(rng.integers(5, 15)) if seed < 12 else int(rng.integers(17, 60))
     q = random_config(world, n, rng, obs)
     g = compute_weights(q, PARAMS, obs)
-    lam, nu = fiedler_pair(g)
+    lam, nu = g.fiedler()
     graph = nx.Graph()
     graph.add_nodes_from(range(len(q)))
     for (a, b), w in zip(*g.active(), strict=True):

@@ -21,11 +21,12 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from tether.continuous.connectivity import ObstacleIndex, compute_weights, fiedler_pair
 from tether.continuous.placement import safe_team
 from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.continuous.weights import compute_weights
 from tether.geometry import point_segment_distance
 from tether.sim import StepContext, TeamState
+from tether.world.clearance import ObstacleIndex
 from tether.world.world import World
 
 SEEDS_PER_SCENE = 100
@@ -71,7 +72,7 @@ def check_invariants(
     world = scene(name)
     d = np.linalg.norm(q[:, None] - q[None], axis=-1)[np.triu_indices(len(q), 1)]
     graph = compute_weights(q, c, obstacle_index(name))
-    lam = fiedler_pair(graph)[0]
+    lam = graph.fiedler()[0]
     out = {"lambda2": lam, "distance": float(d.min()), "clearance": np.inf, "los": np.inf}
     if tree is not None:
         out["clearance"] = float(tree.query(q)[0].min())

@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.connectivity import ConnectivityParams, compute_weights, fiedler_pair
 from tether.continuous.estimation import (
     EstimatorParams,
     FiedlerEstimator,
     estimate_errors,
 )
+from tether.continuous.params import ConnectivityParams
+from tether.continuous.weights import compute_weights
 
 PARAMS = ConnectivityParams()
 ROUNDS = 6000
@@ -114,7 +115,7 @@ def test_links_that_vanish_drop_their_mail() -> None:
 def test_estimator_converges_on_static_graphs(seed: int, loss: float) -> None:
     rng = np.random.default_rng(seed)
     graph = compute_weights(sample_positions(rng), PARAMS)
-    lam, nu = fiedler_pair(graph)
+    lam, nu = graph.fiedler()
     est = FiedlerEstimator.create(N, rng, comm=CommParams(loss_probability=loss))
     est.update(graph, ROUNDS)
     lam_err, vec_err = estimate_errors(est, lam, nu)
@@ -140,7 +141,7 @@ def test_estimator_tracks_a_slowly_moving_graph(seed: int) -> None:
     for k in range(ROUNDS // chunk):
         est.update(compute_weights(q0 + velocity * k * chunk, PARAMS), chunk)
     graph = compute_weights(q0 + velocity * ROUNDS, PARAMS)
-    lam, nu = fiedler_pair(graph)
+    lam, nu = graph.fiedler()
     lam_err, vec_err = estimate_errors(est, lam, nu)
     assert lam_err < 5e-2 and vec_err < 5e-2, (lam, lam_err, vec_err)
 
@@ -150,7 +151,7 @@ def test_estimator_saturates_above_k3_over_k2() -> None:
     q = np.array([[0.0, 0, 0], [1.5, 0, 0], [0, 1.5, 0], [1.5, 1.5, 0]]) * 2
     params = ConnectivityParams(rc_m=0.5, rc_outer_m=1.0)
     graph = compute_weights(q, params)
-    lam, _ = fiedler_pair(graph)
+    lam, _ = graph.fiedler()
     est_params = EstimatorParams(k1=1.0, k2=1.0, k3=0.5)
     assert lam > est_params.saturation
     est = FiedlerEstimator.create(4, np.random.default_rng(0), params=est_params)

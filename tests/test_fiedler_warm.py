@@ -6,13 +6,11 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from tether.continuous.connectivity import (
-    SPARSE_MIN_N,
-    ConnectivityParams,
-    compute_weights,
-    fiedler_pair,
-    warm_fiedler_pair,
-)
+from tether.continuous.params import ConnectivityParams
+from tether.continuous.weights import compute_weights
+from tether.graph import SUBSET_MAX_N, warm_fiedler
+
+SPARSE_MIN_N = SUBSET_MAX_N + 1  # the first team size on the sparse / warm solvers
 
 PARAMS = ConnectivityParams()
 
@@ -46,13 +44,13 @@ def test_warm_equals_cold_on_slowly_moving_team(n: int, seed: int) -> None:
         q = q + rng.normal(0.0, 0.03, q.shape)  # a few integrator steps of motion
         graph = compute_weights(q, PARAMS)
         lam, exact, _ = dense_pair(graph)
-        warm = warm_fiedler_pair(graph, nu)
+        warm = warm_fiedler(graph.n, graph.pairs, graph.weights, nu)
         if warm is not None:
             certified += 1
             assert warm[0] == pytest.approx(lam, rel=1e-9, abs=0)
             assert abs(float(warm[1] @ exact)) == pytest.approx(1.0, abs=1e-8)
             assert float(warm[1] @ nu) > 0  # sign follows the guess
-        got = fiedler_pair(graph, guess=nu)  # warm above SPARSE_MIN_N, dense below
+        got = graph.fiedler(guess=nu)  # warm above SPARSE_MIN_N, dense below
         assert got[0] == pytest.approx(lam, rel=1e-9, abs=0)
         nu = got[1]
     assert certified == 6  # a good warm start is always certified on these teams
@@ -63,14 +61,19 @@ def test_wrong_guess_is_rejected_not_returned() -> None:
     q = free_team(SPARSE_MIN_N + 9, 7)
     graph = compute_weights(q, PARAMS)
     lam, _, nu3 = dense_pair(graph)
-    warm = warm_fiedler_pair(graph, nu3)
+    warm = warm_fiedler(graph.n, graph.pairs, graph.weights, nu3)
     if warm is not None:  # allowed only if it still found lambda2 (certified)
         assert warm[0] == pytest.approx(lam, rel=1e-9, abs=0)
-    assert fiedler_pair(graph, guess=nu3)[0] == pytest.approx(lam, rel=1e-9, abs=0)
+    assert graph.fiedler(guess=nu3)[0] == pytest.approx(lam, rel=1e-9, abs=0)
 
 
 def test_disconnected_team_falls_back() -> None:
     q = np.concatenate([free_team(SPARSE_MIN_N, 4), free_team(20, 5) + [0.0, 0.0, 500.0]])
     graph = compute_weights(q, PARAMS)
-    assert warm_fiedler_pair(graph, np.random.default_rng(0).normal(size=len(q))) is None
-    assert fiedler_pair(graph, guess=np.ones(len(q)))[0] == pytest.approx(0.0, abs=1e-9)
+    assert (
+        warm_fiedler(
+            graph.n, graph.pairs, graph.weights, np.random.default_rng(0).normal(size=len(q))
+        )
+        is None
+    )
+    assert graph.fiedler(guess=np.ones(len(q)))[0] == pytest.approx(0.0, abs=1e-9)

@@ -127,7 +127,9 @@ def team_metrics(
     """Connectivity and safety metrics of the true interaction graph at one step."""
     n = len(positions)
     n_comp, _ = components(n, obs.pairs)
-    lam = algebraic_connectivity(n, obs.pairs) if n <= LAMBDA2_MAX_N else float("nan")
+    lam = float("nan")
+    if n <= LAMBDA2_MAX_N:  # full dense eigh up to 400 robots: the recorded values since 0.1
+        lam = algebraic_connectivity(n, obs.pairs, method="dense" if n <= 400 else "sparse")
     close = pairs_within(positions, collision_distance_m) if collision_distance_m > 0 else []
     if n > 1 and len(obs.pairs):
         d = np.linalg.norm(obs.true_relative, axis=1).min()

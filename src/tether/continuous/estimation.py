@@ -51,7 +51,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.connectivity import WeightedGraph
+from tether.continuous.weights import WeightedGraph
 
 
 @dataclass(frozen=True)

@@ -11,12 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from tether.continuous.connectivity import (
-    ConnectivityParams,
-    ObstacleIndex,
-    compute_weights,
-    fiedler_pair,
-)
+from tether.continuous.params import ConnectivityParams
+from tether.continuous.weights import compute_weights
+from tether.world.clearance import ObstacleIndex
 from tether.world.world import World
 
 
@@ -69,7 +66,7 @@ def safe_team(
         q = np.asarray(pts)
         if obstacles.tree is not None and obstacles.tree.query(q[0])[0] <= params.ro_outer_m:
             continue
-        lam, _ = fiedler_pair(compute_weights(q, params, obstacles))
+        lam, _ = compute_weights(q, params, obstacles).fiedler()
         if lam > params.lambda2_min:
             return q
     raise ValueError(f"could not place {n} robots with a connected weighted graph")

@@ -2,7 +2,7 @@
 
 Each robot obeys ``M dv/dt = -B v + f_lambda + f_ext`` (eq. (1)), where
 ``f_lambda`` is the generalized connectivity force (App. A, eq. (17)-(18),
-:mod:`tether.continuous.connectivity`) and ``f_ext`` a bounded external force
+:mod:`tether.continuous.gradient`) and ``f_ext`` a bounded external force
 standing in for the traveling force of Algorithm 2: nothing, constant
 forces, operator goals (a saturated spring to a goal point) or random pulls
 (a random direction and magnitude per robot, redrawn every ``hold_s``).
@@ -31,36 +31,18 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.connectivity import (
-    ConnectivityParams,
-    ObstacleIndex,
-    compute_weights,
-    connectivity_force,
-    fiedler_pair,
-    messages,
-)
 from tether.continuous.dynamics import IntegratorParams, integrate
 from tether.continuous.estimation import EstimatorParams, FiedlerEstimator, estimate_errors
+from tether.continuous.gradient import connectivity_force, messages
+from tether.continuous.params import TABLE2, ConnectivityParams
+from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
 from tether.registry import STRATEGIES
 from tether.sim import StepContext, StrategyBase, TeamState
+from tether.world.clearance import ObstacleIndex
 from tether.world.world import World
 
-# Table 2 of the paper: (R's, Rs), (Ro, R'o), (Rc, R'c), (lambda2_min, lambda2_null).
-TABLE2: dict[str, dict[str, float]] = {
-    "outdoor": {  # "empty space and town"
-        "rs_inner_m": 2.5, "rs_m": 6.0, "ro_m": 0.75, "ro_outer_m": 1.75,
-        "rc_m": 1.0, "rc_outer_m": 2.5, "lambda2_min": 0.0, "lambda2_null": 1.0,
-    },
-    "office": {
-        "rs_inner_m": 1.1, "rs_m": 2.5, "ro_m": 0.25, "ro_outer_m": 0.6,
-        "rc_m": 0.8, "rc_outer_m": 1.1, "lambda2_min": 0.0, "lambda2_null": 1.0,
-    },
-    "experiment": {  # Sec. 4.2, the quadrotor experiment
-        "rs_inner_m": 1.4, "rs_m": 2.5, "ro_m": 0.5, "ro_outer_m": 0.75,
-        "rc_m": 1.0, "rc_outer_m": 1.4, "lambda2_min": 0.0, "lambda2_null": 1.0,
-    },
-}  # fmt: skip
+_OUTDOOR = TABLE2["outdoor"]
 
 
 class _Strict(BaseModel):
@@ -116,14 +98,14 @@ class ConnectivityStrategyParams(_Strict):
     """
 
     preset: Literal["outdoor", "office", "experiment"] = "outdoor"
-    rs_inner_m: float = Field(default=2.5, gt=0)
-    rs_m: float = Field(default=6.0, gt=0)
-    ro_m: float = Field(default=0.75, gt=0)
-    ro_outer_m: float = Field(default=1.75, gt=0)
-    rc_m: float = Field(default=1.0, gt=0)
-    rc_outer_m: float = Field(default=2.5, gt=0)
-    lambda2_min: float = Field(default=0.0, ge=0)
-    lambda2_null: float = Field(default=1.0, gt=0)
+    rs_inner_m: float = Field(default=_OUTDOOR["rs_inner_m"], gt=0)
+    rs_m: float = Field(default=_OUTDOOR["rs_m"], gt=0)
+    ro_m: float = Field(default=_OUTDOOR["ro_m"], gt=0)
+    ro_outer_m: float = Field(default=_OUTDOOR["ro_outer_m"], gt=0)
+    rc_m: float = Field(default=_OUTDOOR["rc_m"], gt=0)
+    rc_outer_m: float = Field(default=_OUTDOOR["rc_outer_m"], gt=0)
+    lambda2_min: float = Field(default=_OUTDOOR["lambda2_min"], ge=0)
+    lambda2_null: float = Field(default=_OUTDOOR["lambda2_null"], gt=0)
     potential_gain_n: float = Field(default=1.0, gt=0)
     mass_kg: float = Field(default=1.0, gt=0)
     damping_ns_per_m: float = Field(default=2.0, ge=0)
@@ -228,7 +210,7 @@ class ConnectivityStrategy(StrategyBase):
     ) -> ConnectivityStrategy:
         conn = params.connectivity()
         graph = compute_weights(initial_state.positions, conn, ObstacleIndex.from_world(world))
-        lam, _ = fiedler_pair(graph)
+        lam, _ = graph.fiedler()
         if not lam > conn.lambda2_min:
             raise ScenarioError(
                 f"{scenario.source}: team.init: {_unsafe_start(lam, conn)}"
@@ -254,7 +236,7 @@ class ConnectivityStrategy(StrategyBase):
         self._est_err: list[tuple[float, float]] = []
         self.estimator: FiedlerEstimator | None = None
         graph = compute_weights(state.positions, self.conn, self.obstacles)
-        lam, nu = fiedler_pair(graph)
+        lam, nu = graph.fiedler()
         if not lam > self.conn.lambda2_min:
             raise ValueError(_unsafe_start(lam, self.conn))
         self._nu = nu
@@ -271,7 +253,7 @@ class ConnectivityStrategy(StrategyBase):
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
         graph = compute_weights(q, self.conn, self.obstacles)
         if self.params.eigensolver == "exact" or self.params.safeguard:
-            lam, nu = fiedler_pair(graph, guess=self._nu)
+            lam, nu = graph.fiedler(guess=self._nu)
         else:
             lam, nu = np.inf, None
         return lam, (graph, lam, nu)
@@ -321,7 +303,7 @@ class ConnectivityStrategy(StrategyBase):
     def _observe(self, q: np.ndarray, graph: Any, lam: float, nu: np.ndarray | None) -> None:
         """Track the invariants (exact lambda2, distances, clearances) for ``metrics``."""
         if nu is None and self.n <= 500:
-            lam, nu = fiedler_pair(graph, guess=self._nu)
+            lam, nu = graph.fiedler(guess=self._nu)
         if np.isfinite(lam):
             self._min["lambda2"] = min(self._min["lambda2"], float(lam))
         if len(graph.pairs):

@@ -1,25 +1,15 @@
-"""Interaction graphs of a team: links, Laplacians, lambda2, components, stretch.
+"""Structure of a graph: neighbour pairs, adjacency, Laplacians, components, stretch.
 
-A graph on ``n`` robots is given by an ``(m, 2)`` integer array of undirected
-links ``pairs`` (``i < j``) and optional ``(m,)`` positive weights. Everything
-here works on sparse matrices so that 10,000-robot teams stay cheap; dense
-eigensolvers are used for small teams where they are faster and exact.
-
-The algebraic connectivity lambda2 (Fiedler 1973) is the second-smallest
-eigenvalue of the Laplacian ``L = D - A``; it is positive iff the graph is
-connected. Its eigenvector is the Fiedler vector.
+A graph on ``n`` nodes is an ``(m, 2)`` integer array of undirected links
+``pairs`` (``i < j``) with optional ``(m,)`` non-negative weights.
 """
 
 from __future__ import annotations
-
-from typing import Literal
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
-
-DENSE_MAX_N = 400  # below this, a dense eigh is faster than a sparse solver
 
 
 def pairs_within(positions: np.ndarray, range_m: float) -> np.ndarray:
@@ -69,6 +59,23 @@ def laplacian(n: int, pairs: np.ndarray, weights: np.ndarray | None = None) -> s
     return (sp.diags(degree) - a).tocsr()
 
 
+def laplacian_dense(n: int, pairs: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Dense ``(n, n)`` Laplacian ``L = diag(W 1) - W`` (links with zero weight included).
+
+    The one dense builder of the package: every dense eigensolver in tether
+    factors exactly this matrix, so two callers on the same graph get the
+    same bits.
+    """
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
+    w = np.ones(len(pairs)) if weights is None else np.asarray(weights, dtype=float)
+    lap = np.zeros((n, n))
+    i, j = pairs[:, 0], pairs[:, 1]
+    lap[i, j] = -w
+    lap[j, i] = -w
+    lap[np.diag_indices(n)] = -lap.sum(axis=1)
+    return lap
+
+
 def components(n: int, pairs: np.ndarray) -> tuple[int, np.ndarray]:
     """Number of connected components and the component label of each robot."""
     if n == 0:
@@ -80,63 +87,6 @@ def components(n: int, pairs: np.ndarray) -> tuple[int, np.ndarray]:
 def is_connected(n: int, pairs: np.ndarray) -> bool:
     """True iff the graph on ``n`` robots is connected (a single robot is)."""
     return n <= 1 or components(n, pairs)[0] == 1
-
-
-def fiedler(
-    n: int,
-    pairs: np.ndarray,
-    weights: np.ndarray | None = None,
-    *,
-    method: Literal["auto", "dense", "sparse"] = "auto",
-) -> tuple[float, np.ndarray]:
-    """Algebraic connectivity lambda2 and a unit Fiedler vector.
-
-    Parameters
-    ----------
-    n, pairs, weights
-        The graph (see module docstring).
-    method
-        ``"dense"``: ``numpy.linalg.eigh`` on the full Laplacian, ``O(n^3)``.
-        ``"sparse"``: shift-invert Lanczos (``scipy.sparse.linalg.eigsh``) on
-        ``L + sigma I``, about ``O(m)`` per iteration plus one sparse LU.
-        ``"auto"``: dense up to ``DENSE_MAX_N`` robots.
-
-    Returns
-    -------
-    lambda2, vector
-        ``lambda2 >= 0``; it is exactly 0 for a disconnected graph, in which
-        case the vector is a normalised, zero-mean component indicator.
-    """
-    if n < 2:
-        return 0.0, np.zeros(n)
-    if method == "auto":
-        method = "dense" if n <= DENSE_MAX_N else "sparse"
-    lap = laplacian(n, pairs, weights)
-    if method == "dense":
-        vals, vecs = np.linalg.eigh(lap.toarray())
-        return max(float(vals[1]), 0.0), vecs[:, 1]
-    count, labels = components(n, pairs)
-    if count > 1:
-        v = (labels == labels[0]).astype(float)
-        v -= v.mean()
-        return 0.0, v / np.linalg.norm(v)
-    from scipy.sparse.linalg import eigsh
-
-    sigma = -1e-3
-    vals, vecs = eigsh(lap.tocsc(), k=2, sigma=sigma, which="LM")
-    order = np.argsort(vals)
-    return max(float(vals[order[1]]), 0.0), vecs[:, order[1]]
-
-
-def algebraic_connectivity(
-    n: int,
-    pairs: np.ndarray,
-    weights: np.ndarray | None = None,
-    *,
-    method: Literal["auto", "dense", "sparse"] = "auto",
-) -> float:
-    """lambda2 of the (weighted) Laplacian; see :func:`fiedler`."""
-    return fiedler(n, pairs, weights, method=method)[0]
 
 
 def stretch(positions: np.ndarray, pairs: np.ndarray) -> float:

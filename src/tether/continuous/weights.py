@@ -1,0 +1,171 @@
+"""The weighted graph ``G_lambda`` of the team (App. A, steps 1-2).
+
+Continuous-connectivity paper (Nestmeyer et al., "Decentralized simultaneous
+multi-target exploration using a connected network of multiple robots"),
+Sec. 2 and Appendix A, after Robuffo Giordano et al. (2013).
+
+Weights
+-------
+For robots ``i != j`` with distance ``d_ij`` and line-of-sight clearance
+``d_ijo = min_{s in [0,1], o in O} ||q_i + s (q_j - q_i) - o||``::
+
+    W_ij = A(d_ij) * B(d_ijo) * C_i * C_j                       (App. A, step 2)
+    A(d)   = 1 - S(d; R's, Rs)      range factor, 0 iff d >= Rs          (a)
+    B(d)   = S(d; Ro, R'o)          obstacle factor, 0 iff d_ijo <= Ro   (b)
+    C_i    = prod_{k != i} G(d_ik)  collision factor of robot i          (c)
+    G(d)   = S(d; Rc, R'c)          0 iff d <= Rc
+
+so ``W_ij = 0`` exactly when (a) the pair is out of range, (b) its line of
+sight comes within ``Ro`` of an obstacle point, or (c) some robot ``k`` is
+within ``Rc`` of ``i`` or of ``j``. ``P_ij = A B`` is the *pair factor*.
+
+The smooth step ``S`` and its log-derivative are in
+:mod:`tether.continuous.potential`; line-of-sight clearance ``d_ijo`` comes
+from the world layer's :class:`tether.world.clearance.ObstacleIndex`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tether.continuous.params import ConnectivityParams
+from tether.continuous.potential import smooth_step, smooth_step_log_derivative
+from tether.graph import fiedler, laplacian_dense, pairs_within
+from tether.world.clearance import ObstacleIndex
+
+
+@dataclass
+class WeightedGraph:
+    """Weights of App. A with everything the gradient needs (arrays over pairs).
+
+    ``pairs`` are the ``(m, 2)`` robot pairs within ``Rs`` (``i < j``);
+    ``coll_pairs`` the ``(mc, 2)`` pairs within ``R'c``. Per pair:
+    ``dP_di``/``dP_dj`` are ``(m, dim)`` derivatives of the pair factor with
+    respect to ``q_i``/``q_j``, ``clearance_m`` the line-of-sight clearance
+    (``inf`` if beyond ``R'o``). Per collision pair: ``coll_unit`` is
+    ``(q_i - q_k) / d_ik`` and ``coll_logd`` the log-derivative ``G'/G``.
+    """
+
+    n: int
+    pairs: np.ndarray
+    pair_factor: np.ndarray
+    dP_di: np.ndarray
+    dP_dj: np.ndarray
+    clearance_m: np.ndarray
+    collision: np.ndarray
+    coll_pairs: np.ndarray
+    coll_unit: np.ndarray
+    coll_logd: np.ndarray
+
+    @property
+    def weights(self) -> np.ndarray:
+        """``W_ij = P_ij C_i C_j`` per pair."""
+        return (
+            self.pair_factor * self.collision[self.pairs[:, 0]] * self.collision[self.pairs[:, 1]]
+        )
+
+    def active(self) -> tuple[np.ndarray, np.ndarray]:
+        """Pairs with ``W_ij > 0`` and their weights (the graph ``G_lambda``)."""
+        w = self.weights
+        keep = w > 0
+        return self.pairs[keep], w[keep]
+
+    def laplacian_dense(self) -> np.ndarray:
+        """Dense weighted Laplacian ``L = diag(W 1) - W``."""
+        return laplacian_dense(self.n, self.pairs, self.weights)
+
+    def fiedler(self, *, guess: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """Exact lambda2 and unit Fiedler vector of ``G_lambda`` (:func:`tether.graph.fiedler`).
+
+        ``guess`` (a previous Fiedler vector) fixes the sign of the result and,
+        above ``SUBSET_MAX_N`` robots, is the certified warm start.
+        """
+        return fiedler(self.n, self.pairs, self.weights, guess=guess)
+
+
+def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.ndarray:
+    """``C_i = prod_k G(d_ik)`` per robot from the pair values ``G`` (1 if no pair)."""
+    logc = np.zeros(n)
+    zero = np.zeros(n, dtype=bool)
+    if len(coll_pairs):
+        with np.errstate(divide="ignore"):
+            lg = np.log(gamma)
+        finite = gamma > 0
+        np.add.at(logc, coll_pairs[finite, 0], lg[finite])
+        np.add.at(logc, coll_pairs[finite, 1], lg[finite])
+        zero[coll_pairs[~finite, 0]] = True
+        zero[coll_pairs[~finite, 1]] = True
+    return np.where(zero, 0.0, np.exp(logc))
+
+
+def compute_weights(
+    positions: np.ndarray,
+    params: ConnectivityParams,
+    obstacles: ObstacleIndex | None = None,
+    pairs: np.ndarray | None = None,
+) -> WeightedGraph:
+    """The weighted graph ``G_lambda`` of the team (App. A, steps 1-2).
+
+    Parameters
+    ----------
+    positions
+        ``(n, dim)`` robot positions.
+    params
+        Table 2 parameters.
+    obstacles
+        Obstacle index (``None``: free space).
+    pairs
+        Optional precomputed pairs within ``Rs`` (``i < j``); found with a
+        k-d tree otherwise.
+    """
+    q = np.asarray(positions, dtype=float)
+    n, dim = q.shape
+    if pairs is None:
+        pairs = pairs_within(q, params.rs_m)
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
+    i, j = pairs[:, 0], pairs[:, 1]
+    diff = q[i] - q[j]
+    d = np.linalg.norm(diff, axis=1)
+    keep = d < params.rs_m
+    pairs, i, j, diff, d = pairs[keep], i[keep], j[keep], diff[keep], d[keep]
+    u = diff / np.maximum(d, 1e-300)[:, None]
+    # A(d) = 1 - S(d) = S(R's + Rs - d) by symmetry; the mirrored form keeps tiny values exact
+    a_fac, da = smooth_step(params.rs_inner_m + params.rs_m - d, params.rs_inner_m, params.rs_m)
+    da = -da
+    dP_di = da[:, None] * u
+    clearance = np.full(len(pairs), np.inf)
+    b_fac = np.ones(len(pairs))
+    if obstacles is not None and len(pairs):
+        clearance, s_star, o_star = obstacles.segment_clearance(
+            q[i], q[j], params.ro_outer_m, keys=i.astype(np.int64) * n + j
+        )
+        near = np.isfinite(clearance)
+        b_fac, db = smooth_step(
+            np.where(near, clearance, params.ro_outer_m), params.ro_m, params.ro_outer_m
+        )
+        p_star = q[i] + s_star[:, None] * (q[j] - q[i])
+        grad_d = (p_star - o_star) / np.maximum(clearance, 1e-300)[:, None]
+        grad_d[~near] = 0.0
+        dB_di = (db * (1.0 - s_star))[:, None] * grad_d
+        dB_dj = (db * s_star)[:, None] * grad_d
+        dP_di = dP_di * b_fac[:, None] + a_fac[:, None] * dB_di
+        dP_dj = -da[:, None] * u * b_fac[:, None] + a_fac[:, None] * dB_dj
+    else:
+        dP_dj = -dP_di
+    close = d < params.rc_outer_m
+    coll_pairs = pairs[close]
+    gamma, _ = smooth_step(d[close], params.rc_m, params.rc_outer_m)
+    return WeightedGraph(
+        n=n,
+        pairs=pairs,
+        pair_factor=a_fac * b_fac,
+        dP_di=dP_di,
+        dP_dj=dP_dj,
+        clearance_m=clearance,
+        collision=collision_factor(n, coll_pairs, gamma),
+        coll_pairs=coll_pairs,
+        coll_unit=u[close],
+        coll_logd=smooth_step_log_derivative(d[close], params.rc_m, params.rc_outer_m),
+    )

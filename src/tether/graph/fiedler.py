@@ -1,0 +1,154 @@
+"""Algebraic connectivity lambda2 and the Fiedler vector.
+
+lambda2 (Fiedler 1973) is the second-smallest eigenvalue of the Laplacian
+``L = D - A``; it is positive iff the graph is connected, and its unit
+eigenvector is the Fiedler vector. One public function, :func:`fiedler`, with
+``method=`` dispatch over private solvers, as in networkx's algorithms.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+import scipy.linalg
+from scipy.sparse.linalg import eigsh
+
+from tether.graph.structure import components, laplacian, laplacian_dense
+from tether.graph.warm import warm_fiedler
+
+Method = Literal["auto", "dense", "subset", "sparse", "warm"]
+
+DENSE_MAX_N = 16  # "auto": full numpy eigh up to this size
+SUBSET_MAX_N = 400  # "auto": only the second eigenpair (LAPACK syevr) up to this size
+
+#: lambda2 below this (relative to the largest degree) is checked against the components,
+#: so that a disconnected graph gets exactly 0 rather than rounding noise
+_TINY_REL = 1e-9
+
+
+def _dense(n: int, pairs: np.ndarray, w: np.ndarray | None) -> tuple[float, np.ndarray]:
+    vals, vecs = np.linalg.eigh(laplacian_dense(n, pairs, w))
+    return max(float(vals[1]), 0.0), vecs[:, 1]
+
+
+def _subset(n: int, pairs: np.ndarray, w: np.ndarray | None) -> tuple[float, np.ndarray]:
+    vals, vecs = scipy.linalg.eigh(
+        laplacian_dense(n, pairs, w), subset_by_index=[1, 1], driver="evr", check_finite=False
+    )
+    return max(float(vals[0]), 0.0), vecs[:, 0]
+
+
+def _sparse(n: int, pairs: np.ndarray, w: np.ndarray | None) -> tuple[float, np.ndarray]:
+    if w is not None:  # explicit zeros would only add fill to the factorization
+        keep = w != 0
+        pairs, w = pairs[keep], w[keep]
+    vals, vecs = eigsh(laplacian(n, pairs, w).tocsc(), k=2, sigma=-1e-3, which="LM")
+    order = np.argsort(vals)
+    return max(float(vals[order[1]]), 0.0), vecs[:, order[1]]
+
+
+def _component_vector(n: int, pairs: np.ndarray, w: np.ndarray | None) -> np.ndarray | None:
+    """A unit zero-mean component indicator if the graph is disconnected, else ``None``."""
+    if w is not None:
+        pairs = pairs[w > 0]
+    count, labels = components(n, pairs)
+    if count <= 1:
+        return None
+    v = (labels == labels[0]).astype(float)
+    v -= v.mean()
+    return v / np.linalg.norm(v)
+
+
+def fiedler(
+    n: int,
+    pairs: np.ndarray,
+    weights: np.ndarray | None = None,
+    *,
+    method: Method = "auto",
+    guess: np.ndarray | None = None,
+) -> tuple[float, np.ndarray]:
+    """lambda2 and a unit Fiedler vector of a (weighted) graph.
+
+    Parameters
+    ----------
+    n, pairs, weights
+        The graph: ``n`` nodes, ``(m, 2)`` links, optional ``(m,)`` weights >= 0.
+    method
+        ``"dense"``: ``numpy.linalg.eigh`` on the full Laplacian, ``O(n^3)``.
+        ``"subset"``: only the second eigenpair (``scipy.linalg.eigh`` with
+        the MRRR driver ``syevr``), ``O(n^3)`` with a smaller constant: 2x
+        faster than ``dense`` at 35 nodes, 4.5x at 100.
+        ``"sparse"``: shift-invert Lanczos (``scipy.sparse.linalg.eigsh``),
+        one sparse LU plus ``O(m)`` per iteration.
+        ``"warm"``: the certified inverse iteration of
+        :func:`tether.graph.warm.warm_fiedler` from ``guess``, falling back
+        to ``"sparse"`` when it cannot certify its answer.
+        ``"auto"``: ``dense`` up to ``DENSE_MAX_N`` nodes, ``subset`` up to
+        ``SUBSET_MAX_N``, then ``warm`` when a guess is given, else ``sparse``.
+    guess
+        A previous Fiedler vector: it fixes the sign of the result (so that a
+        warm estimator or a finite-difference test sees a continuous vector)
+        and is the warm start of ``"warm"``.
+
+    Returns
+    -------
+    lambda2, vector
+        ``lambda2 >= 0``; exactly 0 for a disconnected graph (links of zero
+        weight do not connect), whose vector is then a normalised zero-mean
+        component indicator.
+    """
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
+    w = None if weights is None else np.asarray(weights, dtype=float)
+    if n < 2:
+        return 0.0, np.zeros(n)
+    if method == "auto":
+        if n <= DENSE_MAX_N:
+            method = "dense"
+        elif n <= SUBSET_MAX_N:
+            method = "subset"
+        else:
+            method = "warm" if guess is not None else "sparse"
+    if method in ("sparse", "warm"):
+        vec = _component_vector(n, pairs, w)  # the shift-invert solvers need a connected graph
+        if vec is not None:
+            return 0.0, vec
+    if method == "dense":
+        lam, vec = _dense(n, pairs, w)
+    elif method == "subset":
+        lam, vec = _subset(n, pairs, w)
+    elif method == "sparse":
+        lam, vec = _sparse(n, pairs, w)
+    elif method == "warm":
+        if guess is None:
+            raise ValueError("method 'warm' needs a guess (a previous Fiedler vector)")
+        warm = warm_fiedler(n, pairs, w, guess)
+        lam, vec = warm if warm is not None else _sparse(n, pairs, w)
+    else:
+        raise ValueError(f"unknown method {method!r}; expected auto, dense, subset, sparse or warm")
+    if method in ("dense", "subset") and lam <= _TINY_REL * _max_degree(n, pairs, w):
+        comp = _component_vector(n, pairs, w)
+        if comp is not None:
+            lam, vec = 0.0, comp
+    if guess is not None and float(vec @ guess) < 0:
+        vec = -vec
+    return lam, vec
+
+
+def _max_degree(n: int, pairs: np.ndarray, w: np.ndarray | None) -> float:
+    if len(pairs) == 0:
+        return 1.0
+    weights = np.ones(len(pairs)) if w is None else w
+    deg = np.bincount(pairs[:, 0], weights, n) + np.bincount(pairs[:, 1], weights, n)
+    return max(float(deg.max()), 1e-300)
+
+
+def algebraic_connectivity(
+    n: int,
+    pairs: np.ndarray,
+    weights: np.ndarray | None = None,
+    *,
+    method: Method = "auto",
+) -> float:
+    """lambda2 of the (weighted) Laplacian; see :func:`fiedler`."""
+    return fiedler(n, pairs, weights, method=method)[0]

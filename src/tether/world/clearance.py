@@ -1,0 +1,302 @@
+"""Clearance of points and segments from an obstacle point set.
+
+The continuous-connectivity paper models obstacles as a point set ``O``; the
+line-of-sight clearance of a segment, ``min_(s, o) ||a + s (b - a) - o||``,
+decides whether two robots see each other (App. A). :class:`ObstacleIndex`
+answers it exactly with a k-d tree, pre-screened by an occupancy grid's
+distance field and a cache of bounds from the previous call.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from itertools import chain
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from tether.world.grid import OccupancyGrid
+from tether.world.world import World
+
+
+def surface_points(grid: OccupancyGrid) -> np.ndarray:
+    """Centres of occupied cells with a free (or outside) face-neighbour.
+
+    For any point outside the obstacles, the nearest occupied cell centre is
+    such a surface cell (an interior cell always has a closer occupied
+    neighbour towards the point), so the surface replaces the full point set
+    in every clearance computation at a fraction of the size. A segment that
+    crosses an obstacle enters it through a surface cell, so its clearance is
+    below half a cell diagonal with either point set.
+    """
+    occ = grid.occupied
+    padded = np.pad(occ, 1, constant_values=False)
+    interior = occ.copy()
+    for axis in range(occ.ndim):
+        for shift in (-1, 1):
+            interior &= np.roll(padded, shift, axis=axis)[(slice(1, -1),) * occ.ndim]
+    return grid.to_world(np.argwhere(occ & ~interior)).reshape(-1, occ.ndim)
+
+
+def sample_segments(
+    a: np.ndarray, b: np.ndarray, max_spacing_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Evenly spaced points on segments ``a[k] -> b[k]``, endpoints included.
+
+    Returns the owning segment of every sample, the ``(total, dim)`` samples
+    and the ``(k,)`` spacing of each segment (at most ``max_spacing_m``).
+    """
+    length = np.linalg.norm(b - a, axis=1)
+    n_samp = np.ceil(length / max_spacing_m).astype(np.intp) + 1
+    seg = np.repeat(np.arange(len(a)), n_samp)
+    first = np.repeat(np.cumsum(n_samp) - n_samp, n_samp)
+    frac = (np.arange(len(seg)) - first) / np.repeat(np.maximum(n_samp - 1, 1), n_samp)
+    return seg, a[seg] + frac[:, None] * (b - a)[seg], length / np.maximum(n_samp - 1, 1)
+
+
+class ObstacleIndex:
+    """The obstacle point set ``O`` with a k-d tree, and an optional grid pre-screen.
+
+    Parameters
+    ----------
+    points
+        ``(m, dim)`` obstacle points.
+    grid
+        If given, every point must lie in an occupied cell of the grid; its
+        distance field (centre to nearest occupied centre) then gives a
+        rigorous lower bound of segment clearance, which skips the exact
+        search for segments far from every obstacle.
+    """
+
+    def __init__(self, points: np.ndarray, dim: int, grid: OccupancyGrid | None = None) -> None:
+        self.points = np.asarray(points, dtype=float).reshape(-1, dim)
+        self.dim = dim
+        self.grid = grid if len(self.points) else None
+        self.tree = cKDTree(self.points) if len(self.points) else None
+        # clearance lower bounds of recent segments: sorted keys, bound, endpoints then
+        self._cache: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @classmethod
+    def from_world(cls, world: World) -> ObstacleIndex:
+        """Obstacles of a world, with the grid pre-screen when the points lie in occupied cells.
+
+        A point set equal to all occupied cell centres is thinned to the
+        surface first (exact for clearance queries, see :func:`surface_points`).
+        """
+        pts = np.asarray(world.obstacle_points, dtype=float).reshape(-1, world.dim)
+        grid = world.grid
+        if grid is None or not len(pts) or not bool(np.all(grid.is_occupied(pts))):
+            return cls(pts, world.dim, None)
+        if len(pts) == int(grid.occupied.sum()):
+            pts = surface_points(grid)
+        return cls(pts, world.dim, grid)
+
+    @cached_property
+    def _centred(self) -> bool:
+        """All obstacle points are cell centres (then the grid bound is tighter)."""
+        if self.grid is None:
+            return False
+        centres = self.grid.to_world(self.grid.to_cell(self.points))
+        return bool(np.allclose(centres, self.points, rtol=0, atol=1e-9))
+
+    @cached_property
+    def _half_diag_m(self) -> float:
+        return 0.5 * self.grid.resolution_m * np.sqrt(self.dim) if self.grid is not None else 0.0
+
+    @cached_property
+    def _field(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The grid's distance field raveled, its strides (in cells) and its shape."""
+        shape = np.asarray(self.grid.shape)
+        strides = np.cumprod(np.r_[shape[1:], 1][::-1])[::-1]
+        return self.grid.distance_field_m.ravel(), strides.astype(np.intp), shape
+
+    def _field_at(self, pts: np.ndarray) -> np.ndarray:
+        """``DF(c(x))`` per point: distance of its cell centre to the nearest occupied one.
+
+        Equal to ``grid.clearance_m`` (0 outside the grid), with one raveled lookup.
+        """
+        flat, strides, shape = self._field
+        cells = np.floor((pts - self.grid.origin_m) / self.grid.resolution_m).astype(np.intp)
+        ok = np.all((cells >= 0) & (cells < shape), axis=1)
+        return np.where(ok, flat[np.where(ok, cells @ strides, 0)], 0.0)
+
+    def _lower_bound(
+        self, a: np.ndarray, b: np.ndarray, within_m: float | None = None
+    ) -> np.ndarray:
+        """A lower bound of every segment's clearance from the grid's distance field.
+
+        With ``within_m``, a coarse pass (samples every four cells) settles the
+        segments it already puts beyond ``within_m``; only the others are
+        sampled every cell. Both passes give valid bounds.
+        """
+        if within_m is None:
+            return self._field_bound(a, b, self.grid.resolution_m)
+        bound = self._field_bound(a, b, 4.0 * self.grid.resolution_m)
+        fine = np.flatnonzero(bound < within_m)
+        if len(fine):
+            bound[fine] = np.maximum(
+                bound[fine], self._field_bound(a[fine], b[fine], self.grid.resolution_m)
+            )
+        return bound
+
+    def _field_bound(self, a: np.ndarray, b: np.ndarray, spacing_m: float) -> np.ndarray:
+        """The distance-field bound with samples at most ``spacing_m`` apart."""
+        seg, pts, spacing = sample_segments(a, b, spacing_m)
+        field = np.full(len(a), np.inf)
+        np.minimum.at(field, seg, self._field_at(pts))
+        # ||x - o|| >= DF(c(x)) - |x - c(x)| - |o - c(o)|: half a cell diagonal for the
+        # sample x, another for the obstacle point o unless o is a cell centre; plus half
+        # the sample spacing for segment points between samples
+        margin = (1.0 if self._centred else 2.0) * self._half_diag_m
+        return field - margin - 0.5 * spacing
+
+    def _cached_bound(
+        self,
+        keys: np.ndarray,
+        a: np.ndarray,
+        b: np.ndarray,
+        cache: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None,
+    ) -> np.ndarray:
+        """Lower bounds of clearance from the cache (``-inf`` where no entry).
+
+        Clearance is 1-Lipschitz in the endpoints: every point ``(1 - s) a + s b``
+        moves by at most ``max(|a - a0|, |b - b0|)``, so a bound ``c0`` of the
+        segment ``a0 -> b0`` gives ``c0 - max(|a - a0|, |b - b0|)`` for ``a -> b``.
+        Sound whatever the keys (they only choose which old segment to compare).
+        """
+        out = np.full(len(keys), -np.inf)
+        cache = self._cache if cache is None else cache
+        if cache is None or not len(cache[0]):
+            return out
+        ckeys, cbound, ca, cb = cache
+        at = np.minimum(np.searchsorted(ckeys, keys), len(ckeys) - 1)
+        hit = ckeys[at] == keys
+        at = at[hit]
+        move = np.maximum(
+            np.linalg.norm(a[hit] - ca[at], axis=1), np.linalg.norm(b[hit] - cb[at], axis=1)
+        )
+        out[hit] = cbound[at] - move
+        return out
+
+    def _store(self, keys: np.ndarray, bound: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
+        order = np.argsort(keys, kind="stable")
+        self._cache = (keys[order], bound[order], a[order].copy(), b[order].copy())
+
+    #: Cached segments are searched this much beyond the requested radius, so that their
+    #: bound stays useful until an endpoint has moved this far.
+    cache_slack_m: float = 0.25
+
+    def _cached_clearance(
+        self, a: np.ndarray, b: np.ndarray, within_m: float, keys: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`segment_clearance` settling segments from cached bounds first.
+
+        Segments whose bound (:meth:`_cached_bound`) is still ``>= within_m``
+        are beyond ``within_m``; the others are searched out to ``within_m +
+        cache_slack_m``, which gives each a new bound ``min(d*, within_m +
+        cache_slack_m)`` for later calls. Distances at or beyond ``within_m``
+        are reported as ``inf``, exactly as the uncached search does.
+        """
+        k = len(a)
+        dist = np.full(k, np.inf)
+        param = np.zeros(k)
+        closest = np.zeros((k, self.dim))
+        cache = self._cache  # one snapshot: another caller may replace it meanwhile
+        known = self._cached_bound(keys, a, b, cache)
+        todo = np.flatnonzero(known < within_m)
+        reach = within_m + self.cache_slack_m
+        d, s, o = self.segment_clearance(a[todo], b[todo], reach)
+        near = d < within_m
+        dist[todo[near]], param[todo[near]], closest[todo[near]] = d[near], s[near], o[near]
+        # carried segments keep their old endpoints and bounds; searched ones start afresh
+        bound = np.empty(k)
+        new_a, new_b = a.copy(), b.copy()
+        carried = np.flatnonzero(known >= within_m)
+        if len(carried):
+            ckeys, cbound, ca, cb = cache
+            at = np.searchsorted(ckeys, keys[carried])
+            bound[carried], new_a[carried], new_b[carried] = cbound[at], ca[at], cb[at]
+        bound[todo] = np.minimum(d, reach)
+        self._store(keys, bound, new_a, new_b)
+        return dist, param, closest
+
+    def segment_clearance(
+        self,
+        a: np.ndarray,
+        b: np.ndarray,
+        within_m: float,
+        keys: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Clearance of segments ``a[k] -> b[k]`` from ``O`` where it is below ``within_m``.
+
+        With ``keys`` (distinct integers naming the segments, e.g. robot pair
+        codes), lower bounds from the previous call with keys are reused: a
+        segment whose cached bound minus its endpoints' displacement is still
+        ``>= within_m`` is settled without any search (see
+        :meth:`_cached_bound`). The result is identical to the uncached one.
+
+        Returns
+        -------
+        dist, param, closest
+            ``(k,)`` distance (``inf`` where it is ``>= within_m``), ``(k,)``
+            parameter ``s*`` of the closest segment point and ``(k, dim)``
+            the closest obstacle point (undefined where ``dist`` is ``inf``).
+        """
+        a = np.asarray(a, dtype=float).reshape(-1, self.dim)
+        b = np.asarray(b, dtype=float).reshape(-1, self.dim)
+        k = len(a)
+        dist = np.full(k, np.inf)
+        param = np.zeros(k)
+        closest = np.zeros((k, self.dim))
+        if self.tree is None or k == 0:
+            return dist, param, closest
+        if keys is not None:
+            return self._cached_clearance(a, b, within_m, np.asarray(keys, dtype=np.int64))
+        todo = np.arange(k)
+        if self.grid is not None:
+            todo = todo[self._lower_bound(a, b, within_m) < within_m]
+        if len(todo) == 0:
+            return dist, param, closest
+        ta, tb = a[todo], b[todo]
+        # Candidates. Samples x spaced delta <= within_m / 2 along each segment; the
+        # nearest obstacle point of each sample bounds the clearance d* from above, so
+        # d* <= r_seg = min(within_m, min over its samples). The closest pair (p*, o*)
+        # has o* - p* orthogonal to the segment (or p* at an endpoint, a sample), and p*
+        # lies within delta / 2 of a sample x: ||x - o*||^2 <= r_seg^2 + (delta / 2)^2.
+        # Nearest distances are needed exactly up to that radius (it exceeds within_m).
+        seg, samples, spacing = sample_segments(ta, tb, 0.5 * within_m)
+        reach = np.sqrt(within_m**2 + (0.5 * spacing) ** 2)[seg] * (1 + 1e-9)
+        near_d = np.full(len(samples), np.inf)
+        ask = np.ones(len(samples), dtype=bool)
+        if self.grid is not None:  # samples the distance field puts beyond their reach
+            margin = (1.0 if self._centred else 2.0) * self._half_diag_m
+            ask = self._field_at(samples) - margin < reach
+        if ask.any():
+            near_d[ask] = self.tree.query(samples[ask], distance_upper_bound=reach[ask].max())[0]
+        upper = np.full(len(todo), within_m)
+        np.minimum.at(upper, seg, near_d)
+        radius = np.sqrt(upper**2 + (0.5 * spacing) ** 2)[seg] * (1 + 1e-9)
+        use = near_d <= radius  # the other samples have no obstacle point within radius
+        seg, samples, radius = seg[use], samples[use], radius[use]
+        hits = self.tree.query_ball_point(samples, radius)
+        counts = np.fromiter(map(len, hits), dtype=np.intp, count=len(hits))
+        if counts.sum() == 0:
+            return dist, param, closest
+        flat = np.fromiter(chain.from_iterable(hits), dtype=np.intp, count=int(counts.sum()))
+        code = np.unique(np.repeat(seg, counts).astype(np.int64) * len(self.points) + flat)
+        owner = (code // len(self.points)).astype(np.intp)
+        obs = (code % len(self.points)).astype(np.intp)
+        sa, sb, o = ta[owner], tb[owner], self.points[obs]
+        ab = sb - sa
+        denom = np.einsum("kd,kd->k", ab, ab)
+        s = np.clip(np.einsum("kd,kd->k", o - sa, ab) / np.where(denom > 0, denom, 1.0), 0, 1)
+        d = np.linalg.norm(sa + s[:, None] * ab - o, axis=1)
+        order = np.lexsort((d, owner))
+        first = order[np.r_[0, np.flatnonzero(np.diff(owner[order])) + 1]]
+        rows = todo[owner[first]]
+        near = d[first] < within_m
+        rows, first = rows[near], first[near]
+        dist[rows] = d[first]
+        param[rows] = s[first]
+        closest[rows] = o[first]
+        return dist, param, closest
