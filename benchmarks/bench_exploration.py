@@ -21,7 +21,8 @@ import numpy as np
 
 from tether.record import machine
 from tether.recurrent.baseline_utility import UtilityStrategy
-from tether.recurrent.exploration import ExplorationConfig, random_base, run_exploration
+from tether.recurrent.exploration.run import run_exploration
+from tether.recurrent.exploration.sim import ExplorationConfig, random_base
 from tether.recurrent.replanning import RecurrentStrategy
 
 ROOT = Path(__file__).resolve().parents[1]

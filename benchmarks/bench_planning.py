@@ -45,10 +45,10 @@ from pathlib import Path
 
 import numpy as np
 
-from tether.recurrent import _problem
-from tether.recurrent._apx import SharedSteiner
-from tether.recurrent.configuration import optimal_configuration
-from tether.recurrent.synthetic import exploration_instance
+from tether.recurrent.planning import problem as _problem
+from tether.recurrent.planning.apx import SharedSteiner
+from tether.recurrent.planning.configuration import optimal_configuration
+from tether.recurrent.planning.synthetic import exploration_instance
 
 
 def machine_info() -> dict:
@@ -70,7 +70,7 @@ def record_sim_instances(map_path: Path, seed: int, steps: int, min_frontiers: i
     least ``min_frontiers`` frontiers.
     """
     import tether.recurrent.replanning as replanning
-    from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, random_base
+    from tether.recurrent.exploration.sim import ExplorationConfig, ExplorationSim, random_base
     from tether.world.maps import load_map
 
     recorded = []

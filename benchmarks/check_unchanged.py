@@ -80,7 +80,11 @@ def compare(before: dict[str, Any], after: dict[str, Any]) -> list[str]:
                 continue
             if c in new and new[c] != h:
                 problems.append(f"{fname}:{c} differs")
-        if set(cols) == set(new) and not set(cols) & VOLATILE_COLUMNS and before["files"][fname] != after["files"][fname]:
+        if (
+            set(cols) == set(new)
+            and not set(cols) & VOLATILE_COLUMNS
+            and before["files"][fname] != after["files"][fname]
+        ):
             problems.append(f"{fname}: same columns but not byte-identical")
     eb, ea = before.get("events", []), after.get("events", [])
     if len(eb) != len(ea):

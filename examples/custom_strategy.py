@@ -14,7 +14,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from tether.config import Scenario, scenario_from_dict
 from tether.registry import STRATEGIES
 from tether.runner import run
-from tether.sim import StepContext, StrategyBase, TeamState
+from tether.sim import StepContext, Strategy, TeamState
 from tether.world import World
 
 
@@ -24,7 +24,7 @@ class CentroidParams(BaseModel):
 
 
 @STRATEGIES.register("centroid_pull")
-class CentroidPull(StrategyBase):
+class CentroidPull(Strategy):
     """Each robot moves a fraction ``gain`` of the way to the centroid of its measurements."""
 
     name = "centroid_pull"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tether.recurrent.exploration import ExplorationSim
+from tether.recurrent.exploration.sim import ExplorationSim
 
 
 def office(seed: int = 0, size: tuple[float, float] = (12.0, 16.0)) -> np.ndarray:

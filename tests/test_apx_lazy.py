@@ -14,9 +14,9 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.recurrent import _problem
-from tether.recurrent._apx import LazySteiner
-from tether.recurrent.steiner import steiner_tree
+from tether.recurrent.planning import problem as _problem
+from tether.recurrent.planning.apx import LazySteiner
+from tether.recurrent.planning.steiner import steiner_tree
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -55,7 +55,7 @@ def test_apx_with_more_frontiers_per_subset_than_robots_is_exact(seed: int) -> N
     """delta > budget: subsets stop at `budget` frontiers and APX is still exact (k <= delta)."""
     from itertools import combinations
 
-    from tether.recurrent.configuration import optimal_configuration
+    from tether.recurrent.planning.configuration import optimal_configuration
 
     rng = np.random.default_rng(500 + seed)
     g = nx.random_geometric_graph(40, 0.35, seed=seed)

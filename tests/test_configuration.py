@@ -14,11 +14,11 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.recurrent import _problem
-from tether.recurrent._apx import SharedSteiner
-from tether.recurrent.configuration import check_configuration, optimal_configuration
-from tether.recurrent.steiner import steiner_tree
-from tether.recurrent.synthetic import exploration_instance
+from tether.recurrent.planning import problem as _problem
+from tether.recurrent.planning.apx import SharedSteiner
+from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
+from tether.recurrent.planning.steiner import steiner_tree
+from tether.recurrent.planning.synthetic import exploration_instance
 
 
 def brute_force(g: nx.Graph, base, utilities: dict, budget: int, fixed=()) -> tuple[float, int]:

@@ -8,9 +8,9 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.recurrent.configuration import check_configuration, optimal_configuration
-from tether.recurrent.deployment import optimal_deployment
-from tether.recurrent.synthetic import exploration_instance
+from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
+from tether.recurrent.planning.deployment import optimal_deployment
+from tether.recurrent.planning.synthetic import exploration_instance
 
 
 def brute_force_assignment(robots, targets, cost) -> float:

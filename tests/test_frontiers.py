@@ -8,11 +8,12 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.recurrent.expgraph import window_counts
-from tether.recurrent.frontiers import cluster_frontiers, frontier_cells
-from tether.recurrent.geodesic import CoarseGrid
-from tether.recurrent.links import DiskLinks, LineOfSightLinks, link_pairs, segment_free
-from tether.recurrent.sensor import DepthSensor, cast_rays
+from tether.paths.geodesic import CoarseGrid
+from tether.recurrent.planning.expgraph import window_counts
+from tether.recurrent.planning.frontiers import cluster_frontiers, frontier_cells
+from tether.sensing.depth import DepthSensor, cast_rays
+from tether.sensing.links import DiskLinks, LineOfSightLinks, link_pairs
+from tether.world.los import segment_free
 
 SEEDS = range(12)
 

@@ -7,11 +7,12 @@ full experiment is ``tether.recurrent.report.make_report``.
 from __future__ import annotations
 
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, random_base
+from tether.recurrent.exploration.sim import ExplorationConfig, ExplorationSim, random_base
 from tether.recurrent.replanning import RecurrentStrategy
 
 MAPS = Path(__file__).parents[1] / ".." / "shared" / "maps"
@@ -38,11 +39,13 @@ def run(occ, strategy, n=4, steps=60, seed=0, invariant=None):
     cfg = ExplorationConfig(n_robots=n, steps=steps)
     sim = ExplorationSim(occ, random_base(occ, 3, np.random.default_rng(seed)), strategy, cfg)
     strategy.start(sim)
+    explored = [sim.explored_fraction()]
     for _ in range(steps):
         sim.step()
+        explored.append(sim.explored_fraction())
         if invariant is not None:
             invariant(sim)
-    return sim, sim.result(0.0)
+    return sim, SimpleNamespace(explored=np.asarray(explored))
 
 
 def ready_are_connected(sim):

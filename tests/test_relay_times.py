@@ -17,7 +17,12 @@ import pytest
 
 from _exploration_helpers import Idle, farthest_known_path, office
 from tether.recurrent import replanning
-from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, GoalKind, random_base
+from tether.recurrent.exploration.sim import (
+    ExplorationConfig,
+    ExplorationSim,
+    GoalKind,
+    random_base,
+)
 from tether.recurrent.replanning import RecurrentStrategy
 
 MAPS = Path(__file__).parents[1] / ".." / "shared" / "maps"

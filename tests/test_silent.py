@@ -59,7 +59,7 @@ def test_constrained_step_keeps_every_pair_condition_for_true_positions(seed):
     sensor = SensorModel(D_MAX, radial_error_m=DR, angular_error_rad=DTHETA, noise="bound")
     positions = np.vstack([np.zeros(dim), true_rel])
     obs = sense(positions, SensorModel(100.0, noise="none"), rng)
-    from tether.sensing import _noisy
+    from tether.sensing.robots import _noisy
 
     measured = _noisy(obs.of(0), sensor, rng)
     desired = rng.normal(size=(1, dim)) * rng.uniform(0.1, 20)

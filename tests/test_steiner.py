@@ -8,7 +8,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.recurrent.steiner import steiner_tree
+from tether.recurrent.planning.steiner import steiner_tree
 
 
 def brute_force_steiner(graph: nx.Graph, terminals: list, weight: str = "weight") -> float:

@@ -125,12 +125,12 @@ def test_cli_sweep_with_processes(tmp_path):
 
 
 def test_sweep_of_an_exploration_strategy_draws_explored_area(tmp_path):
-    """`recurrent` runs record explored area, not links: the sweep draws that instead."""
+    """`recurrent` runs record explored area and links (robots + BS): the sweep draws both."""
     data = load_scenario("recurrent_demo").model_dump(mode="json")
     data["sim"]["max_steps"] = 40
     data["sweep"] = {"strategy.params.theta": [1, 6]}
     result = run_sweep(scenario_from_dict(data, "recurrent-sweep.yaml"), tmp_path, seeds=1)
-    assert [f.name for f in result.figures] == ["explored.png"]
+    assert [f.name for f in result.figures] == ["links.png", "explored.png"]
     rows = pq.read_table(result.table).to_pylist()
     assert sorted(r["param:strategy.params.theta"] for r in rows) == [1, 6]
     assert all(0 < r["final_explored_fraction"] <= 1 for r in rows)

@@ -17,3 +17,7 @@ class ScenarioError(TetherError):
 
 class MapError(TetherError):
     """A map file is missing, corrupt or inconsistent with its metadata."""
+
+
+class OutputError(TetherError):
+    """An output folder cannot be written, or would mix two runs' files."""

@@ -1,210 +1,87 @@
-"""Run folders: the scenario as run, per-step records, events, summary, figures.
+"""What a run records, and the one summary every run gets.
 
-Layout of a run folder::
+:class:`TrajectoryRecorder` keeps the per-step history of
+:func:`tether.sim.simulate` in memory and turns it into the columns of the run
+folder's tables::
 
-    run_dir/
-      scenario.yaml     the scenario exactly as run (after defaults)
-      steps.parquet     one row per step: team metrics of the true graph
-      robots.parquet    one row per (step, robot): positions (and velocities)
-      events.parquet    one row per event (role changes, plans, elections, ...)
-      summary.json      scalar results (see ``Summary`` in the README)
-      figures/*.png
+    steps.parquet     one row per step: team metrics of the true graph, plus the
+                      strategy's step values (e.g. explored_fraction)
+    robots.parquet    one row per (recorded step, robot): x_m, y_m[, z_m], plus the
+                      strategy's robot values (e.g. connected)
+    links.parquet     one row per (recorded step, link): i, j (indices >= n_robots
+                      are fixed nodes such as a base station)
+    events.parquet    one row per event (role changes, plans, elections, ...)
 
-Every file is written to a temporary name and renamed into place, so a run
-killed mid-write never leaves a half-written file that looks complete.
+:func:`summarize` computes the core keys of ``summary.json`` for every strategy.
 """
 
 from __future__ import annotations
 
-import json
-import os
-import platform
-import subprocess
-import tempfile
 from dataclasses import asdict
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pyarrow as pa
-import pyarrow.parquet as pq
-import yaml
 
-from tether import __version__
+from tether.runfolder import provenance
 from tether.sensing import Observation
-from tether.sim import StepRecord, TeamState
+from tether.sim import RunResult, StepRecord, TeamState
 
-_UMASK = os.umask(0)
-os.umask(_UMASK)
-
-
-def _atomic_write(path: Path, write: Any) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are ordinary files
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, float) and not np.isfinite(value):
-        return None if np.isnan(value) else ("inf" if value > 0 else "-inf")
-    return value
-
-
-def git_hash() -> str | None:
-    """The git commit of the tether source tree, if it is a checkout."""
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"],
-            cwd=Path(__file__).parent,
-            capture_output=True,
-            text=True,
-            timeout=5,
-        )
-    except (OSError, subprocess.TimeoutExpired):
-        return None
-    return out.stdout.strip() or None if out.returncode == 0 else None
-
-
-def provenance() -> dict[str, Any]:
-    """Package version, git hash and machine, recorded with every result."""
-    return {
-        "tether_version": __version__,
-        "git_hash": git_hash(),
-        "python": platform.python_version(),
-        "platform": platform.platform(),
-        "cpu_count": os.cpu_count(),
-    }
-
-
-def machine() -> dict[str, Any]:
-    """The machine a measurement ran on (recorded with benchmark and report results)."""
-    import datetime as dt
-
-    import scipy
-
-    cpu = platform.processor()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(
-                (line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")),
-                cpu,
-            )
-    except OSError:
-        pass
-    return {
-        "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
-        "platform": platform.platform(),
-        "cpu": cpu,
-        "cpu_count": os.cpu_count(),
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-    }
-
-
-class RunFolder:
-    """Writes the files of one run atomically (see module docstring)."""
-
-    def __init__(self, path: str | Path) -> None:
-        self.path = Path(path)
-        self.path.mkdir(parents=True, exist_ok=True)
-
-    def write_yaml(self, name: str, data: dict[str, Any]) -> Path:
-        target = self.path / name
-
-        def write(tmp: str) -> None:
-            with open(tmp, "w") as fh:
-                yaml.safe_dump(_jsonable(data), fh, sort_keys=False)
-
-        _atomic_write(target, write)
-        return target
-
-    def write_json(self, name: str, data: dict[str, Any]) -> Path:
-        target = self.path / name
-
-        def write(tmp: str) -> None:
-            with open(tmp, "w") as fh:
-                json.dump(_jsonable(data), fh, indent=2)
-                fh.write("\n")
-
-        _atomic_write(target, write)
-        return target
-
-    def write_table(self, name: str, columns: dict[str, Any]) -> Path:
-        """Write columns (equal-length sequences) as a Parquet table."""
-        target = self.path / name
-        table = pa.table({k: pa.array(np.asarray(v)) for k, v in columns.items()})
-        _atomic_write(target, lambda tmp: pq.write_table(table, tmp))
-        return target
-
-    def write_rows(self, name: str, rows: list[dict[str, Any]]) -> Path:
-        """Write a list of dicts (possibly with differing keys) as a Parquet table."""
-        target = self.path / name
-        if rows:
-            keys = list(dict.fromkeys(k for r in rows for k in r))
-            cols = {k: [_jsonable(r.get(k)) for r in rows] for k in keys}
-            table = pa.table({k: pa.array(v) for k, v in cols.items()})
-        else:
-            table = pa.table({"step": pa.array([], pa.int64()), "kind": pa.array([], pa.string())})
-        _atomic_write(target, lambda tmp: pq.write_table(table, tmp))
-        return target
-
-    def save_figure(self, fig: Any, name: str, dpi: int = 120) -> Path:
-        """Write ``fig`` as ``figures/<name>`` (atomically) and close it."""
-        import matplotlib.pyplot as plt
-
-        target = self.path / "figures" / name
-        try:
-            _atomic_write(target, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
-        finally:
-            plt.close(fig)  # long sweeps would otherwise keep every figure alive
-        return target
+#: summary keys every run has; a strategy metric with one of these names gets a prefix
+CORE_KEYS = ("scenario", "strategy", "seed", "n_robots", "dim", "sim_time_s", "steps",
+             "wall_time_s")  # fmt: skip
 
 
 class TrajectoryRecorder:
     """Collects per-step records of a :func:`tether.sim.simulate` run in memory.
 
-    ``every`` keeps robot positions only every k-th step (team metrics are kept
-    at every step); ``keep_positions=False`` drops them altogether (large teams).
+    ``every`` keeps robot positions and links only every k-th step (team
+    metrics and step values are kept at every step); ``keep_positions=False``
+    drops them altogether (large teams).
     """
 
     def __init__(self, every: int = 1, keep_positions: bool = True) -> None:
         self.every = max(int(every), 1)
         self.keep_positions = keep_positions
         self.steps: list[StepRecord] = []
+        self.values: list[dict[str, Any]] = []
         self.position_steps: list[int] = []
         self.positions: list[np.ndarray] = []
         self.links: list[np.ndarray] = []
+        self.robot_values: list[dict[str, np.ndarray]] = []
         self.events: list[dict[str, Any]] = []
+        self.fixed: np.ndarray | None = None
 
     def record(
-        self, rec: StepRecord, state: TeamState, obs: Observation, events: list[dict]
+        self,
+        rec: StepRecord,
+        state: TeamState,
+        obs: Observation,
+        events: list[dict[str, Any]],
+        values: dict[str, Any] | None = None,
+        robot_values: dict[str, np.ndarray] | None = None,
     ) -> None:
         self.steps.append(rec)
+        self.values.append(dict(values or {}))
         self.events.extend(events)
+        if state.fixed is not None and self.fixed is None:
+            self.fixed = np.asarray(state.fixed, dtype=float).copy()
         if self.keep_positions and rec.step % self.every == 0:
             self.position_steps.append(rec.step)
             self.positions.append(state.positions.copy())
             self.links.append(obs.pairs.copy())
+            self.robot_values.append({k: np.asarray(v).copy() for k, v in
+                                      (robot_values or {}).items()})  # fmt: skip
+
+    def nodes(self, k: int) -> np.ndarray:
+        """Positions of every graph node at the ``k``-th recorded step (robots, then fixed)."""
+        if self.fixed is None:
+            return self.positions[k]
+        return np.vstack([self.positions[k], self.fixed])
 
     def step_columns(self) -> dict[str, list[Any]]:
-        rows = [asdict(r) for r in self.steps]
-        return {k: [r[k] for r in rows] for k in rows[0]} if rows else {}
+        rows = [asdict(r) | v for r, v in zip(self.steps, self.values, strict=True)]
+        keys = list(dict.fromkeys(k for r in rows for k in r))
+        return {k: [r.get(k) for r in rows] for k in keys}
 
     def robot_columns(self) -> dict[str, np.ndarray]:
         if not self.positions:
@@ -217,6 +94,8 @@ class TrajectoryRecorder:
         }
         for d, axis in zip(range(dim), "xyz", strict=False):
             cols[f"{axis}_m"] = pos[:, :, d].ravel()
+        for key in self.robot_values[0]:
+            cols[key] = np.concatenate([rv[key] for rv in self.robot_values])
         return cols
 
     def link_columns(self) -> dict[str, np.ndarray]:
@@ -227,3 +106,38 @@ class TrajectoryRecorder:
         )
         both = np.concatenate(self.links).reshape(-1, 2)
         return {"step": steps.astype(int), "i": both[:, 0], "j": both[:, 1]}
+
+
+def summarize(scenario: Any, seed: int, result: RunResult, wall_time_s: float) -> dict[str, Any]:
+    """The ``summary.json`` of a run: the core keys (README), then the strategy's metrics.
+
+    Core keys, the same for every strategy: ``scenario``, ``strategy``,
+    ``seed``, ``n_robots``, ``dim``, ``sim_time_s``, ``steps``,
+    ``wall_time_s``, ``connected_all_steps`` (the true interaction graph,
+    fixed nodes included, connected at every step), ``min_lambda2``
+    (unweighted), ``min_links``, ``max_links``, ``collisions``,
+    ``collision_distance_m``, ``min_distance_m`` and ``provenance``. A
+    strategy metric that reuses a core name is stored as ``strategy_<name>``.
+    """
+    recs = result.records
+    lam = np.array([r.lambda2 for r in recs], dtype=float)
+    core = {
+        "scenario": scenario.name,
+        "strategy": scenario.strategy.name,
+        "seed": seed,
+        "n_robots": scenario.team.n_robots,
+        "dim": scenario.world.dim,
+        "sim_time_s": result.sim_time_s,
+        "steps": result.steps,
+        "wall_time_s": wall_time_s,
+        "connected_all_steps": result.connected_all_steps,
+        "min_lambda2": float(np.nanmin(lam)) if np.isfinite(lam).any() else None,
+        "min_links": int(min(r.n_links for r in recs)),
+        "max_links": int(max(r.n_links for r in recs)),
+        "collisions": int(sum(r.collisions for r in recs)),
+        "collision_distance_m": scenario.sim.collision_distance_m,
+        "min_distance_m": float(min(r.min_distance_m for r in recs)),
+    }
+    reserved = set(CORE_KEYS) | {"provenance"}
+    own = {f"strategy_{k}" if k in reserved else k: v for k, v in result.strategy_metrics.items()}
+    return {**core, **own, "provenance": provenance()}

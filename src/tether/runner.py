@@ -21,13 +21,18 @@ from pydantic import ValidationError
 from tether.config import Scenario, format_validation_error, load_scenario
 from tether.errors import MapError, ScenarioError, TetherError
 from tether.graph import is_connected
-from tether.record import RunFolder, TrajectoryRecorder, provenance
+from tether.plugins import load_builtins
+from tether.record import TrajectoryRecorder, summarize
 from tether.registry import SCENES, STRATEGIES
+from tether.runfolder import RunFolder
 from tether.sensing import SensorModel, sensed_pairs
-from tether.sim import RunResult, Strategy, TeamState, simulate
-from tether.strategies import load_builtin_strategies
+from tether.sim import Strategy, TeamState, simulate
 from tether.team import initial_positions
+from tether.viz.plots import links_over_time, snapshot
+from tether.world.scenes import make_scene
 from tether.world.world import World
+
+load_builtins()
 
 
 @dataclass
@@ -50,8 +55,6 @@ class RunOutcome:
 
 def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
     """The scenario's world from the scene registry (``free``, ``map``, ``town``, ...)."""
-    from tether.world.scenes import make_scene
-
     src, cfg = scenario.source, scenario.world
     if cfg.scene not in SCENES:
         raise ScenarioError(
@@ -96,8 +99,7 @@ def make_sensor(scenario: Scenario) -> SensorModel:
     )
 
 
-def strategy_class(scenario: Scenario) -> type:
-    load_builtin_strategies()
+def strategy_class(scenario: Scenario) -> type[Strategy]:
     name = scenario.strategy.name
     if name not in STRATEGIES:
         raise ScenarioError(
@@ -117,12 +119,28 @@ def strategy_params(scenario: Scenario, cls: type) -> Any:
 
 
 def build(scenario: Scenario, seed: int | None = None) -> Built:
-    """Turn a validated scenario into world, sensor, team and strategy (no simulation)."""
+    """Turn a validated scenario into world, sensor, team and strategy (no simulation).
+
+    Everything ``tether validate`` checks happens here, before any simulation:
+    the strategy's parameters, the world, the initial team and whatever the
+    strategy's ``from_scenario`` checks.
+    """
     rng = np.random.default_rng(scenario.seed if seed is None else seed)
     cls = strategy_class(scenario)
     params = strategy_params(scenario, cls)
     world = build_world(scenario, rng)
     sensor = make_sensor(scenario)
+    initial = cls.initial_state(params, scenario, world, rng)
+    if initial is None:
+        initial = TeamState.at_rest(place_team(scenario, world, sensor, rng))
+    strategy = cls.from_scenario(params, scenario, world, initial, rng)
+    return Built(scenario, world, sensor, initial, strategy, rng)
+
+
+def place_team(
+    scenario: Scenario, world: World, sensor: SensorModel, rng: np.random.Generator
+) -> np.ndarray:
+    """The team of ``team.init``: in free space and connected in the sensing graph."""
     try:
         positions = initial_positions(
             scenario.team.init, scenario.team.n_robots, world, rng, scenario.sensing.range_m
@@ -142,44 +160,12 @@ def build(scenario: Scenario, seed: int | None = None) -> Built:
             f"{scenario.source}: team.init: the initial team is not connected with "
             f"sensing.range_m={sensor.range_m}; place robots closer (spacing_m) or raise the range"
         )
-    initial = TeamState.at_rest(positions)
-    strategy = cls.from_scenario(params, scenario, world, initial, rng)
-    return Built(scenario, world, sensor, initial, strategy, rng)
+    return positions
 
 
 def default_run_dir(scenario: Scenario, seed: int, root: str | Path | None = None) -> Path:
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
     return Path(root or scenario.output.dir) / f"{scenario.name}-s{seed}-{stamp}"
-
-
-def summarize(
-    scenario: Scenario, seed: int, result: RunResult, wall_time_s: float
-) -> dict[str, Any]:
-    """The ``summary.json`` of a navigation run (keys documented in the README)."""
-    recs = result.records
-    lam = np.array([r.lambda2 for r in recs], dtype=float)
-    return {
-        "scenario": scenario.name,
-        "strategy": scenario.strategy.name,
-        "seed": seed,
-        "n_robots": scenario.team.n_robots,
-        "dim": scenario.world.dim,
-        "sim_time_s": result.sim_time_s,
-        "steps": result.steps,
-        "wall_time_s": wall_time_s,
-        "connected_all_steps": result.connected_all_steps,
-        "min_lambda2": float(np.nanmin(lam)) if np.isfinite(lam).any() else None,
-        "min_links": int(min(r.n_links for r in recs)),
-        "max_links": int(max(r.n_links for r in recs)),
-        "collisions": int(sum(r.collisions for r in recs)),
-        "collision_distance_m": scenario.sim.collision_distance_m,
-        "min_distance_m": float(min(r.min_distance_m for r in recs)),
-        **{f"strategy_{k}" if k in _RESERVED else k: v for k, v in result.strategy_metrics.items()},
-        "provenance": provenance(),
-    }
-
-
-_RESERVED = {"scenario", "strategy", "seed", "n_robots", "steps", "sim_time_s", "wall_time_s"}
 
 
 def run(
@@ -189,7 +175,12 @@ def run(
     seed: int | None = None,
     figures: bool | None = None,
 ) -> RunOutcome:
-    """Run one scenario and write its run folder; returns the folder and the summary."""
+    """Run one scenario and write its run folder; returns the folder and the summary.
+
+    The folder is committed as a whole (:class:`tether.runfolder.RunFolder`):
+    ``summary.json`` is written last, and the folder appears at ``out_dir``
+    only when the run and its figures are complete.
+    """
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     if seed is not None and seed != scenario.seed:  # the run folder records the seed it ran
@@ -197,42 +188,60 @@ def run(
         scenario = scenario.model_copy(update={"seed": seed})
         scenario._source, scenario._base_dir = source, base_dir
     seed = scenario.seed
-    cls = strategy_class(scenario)
-    path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
-    if hasattr(cls, "run_scenario"):  # strategies with their own loop (exploration)
-        folder = RunFolder(path)
-        folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
-        summary = cls.run_scenario(scenario, path, np.random.default_rng(seed))
-        return RunOutcome(path, summary)
     built = build(scenario, seed)
+    path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
     folder = RunFolder(path)
-    folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
-    recorder = TrajectoryRecorder(every=scenario.output.record_every)
-    start = time.perf_counter()
-    result = simulate(
-        built.world,
-        built.sensor,
-        built.strategy,
-        built.initial,
-        dt_s=scenario.sim.dt_s,
-        max_steps=scenario.sim.max_steps,
-        rng=built.rng,
-        collision_distance_m=scenario.sim.collision_distance_m,
-        recorder=recorder,
-    )
-    wall = time.perf_counter() - start
-    folder.write_table("steps.parquet", recorder.step_columns())
-    folder.write_table("robots.parquet", recorder.robot_columns())
-    folder.write_table("links.parquet", recorder.link_columns())
-    folder.write_rows("events.parquet", recorder.events)
-    summary = summarize(scenario, seed, result, wall)
-    folder.write_json("summary.json", summary)
-    if scenario.output.figures if figures is None else figures:
-        from tether.viz.plots import run_figures
-
-        for name, fig in run_figures(built, recorder).items():
-            folder.save_figure(fig, name)
+    try:
+        recorder = TrajectoryRecorder(every=scenario.output.record_every)
+        start = time.perf_counter()
+        result = simulate(
+            built.world,
+            built.sensor,
+            built.strategy,
+            built.initial,
+            dt_s=scenario.sim.dt_s,
+            max_steps=scenario.sim.max_steps,
+            rng=built.rng,
+            collision_distance_m=scenario.sim.collision_distance_m,
+            recorder=recorder,
+        )
+        wall = time.perf_counter() - start
+        folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
+        folder.write_table("steps.parquet", recorder.step_columns())
+        folder.write_table("robots.parquet", recorder.robot_columns())
+        folder.write_table("links.parquet", recorder.link_columns())
+        folder.write_rows("events.parquet", recorder.events)
+        if scenario.output.figures if figures is None else figures:
+            for name, fig in run_figures(built, recorder).items():
+                folder.save_figure(fig, name)
+        summary = summarize(scenario, seed, result, wall)
+        folder.commit(summary)
+    except BaseException:
+        folder.abort()
+        raise
     return RunOutcome(path, summary)
 
 
-__all__ = ["Built", "RunOutcome", "TetherError", "build", "build_world", "run"]
+def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Any]:
+    """The standard figures of a run (links over time, snapshots), then the strategy's own."""
+    figs: dict[str, Any] = {}
+    steps = recorder.step_columns()
+    if not steps:
+        return figs
+    dt_s = built.scenario.sim.dt_s
+    t = np.asarray(steps["step"]) * dt_s
+    n = built.initial.n
+    figs["links.png"] = links_over_time({built.scenario.name: (t, np.asarray(steps["n_links"]))}, n)
+    if recorder.positions:
+        idx = sorted({0, len(recorder.positions) // 2, len(recorder.positions) - 1})
+        figs["snapshot.png"] = snapshot(
+            [recorder.nodes(i) for i in idx],
+            [recorder.links[i] for i in idx],
+            [f"t = {recorder.position_steps[i] * dt_s:g} s" for i in idx],
+            world=built.world,
+        )
+    figs.update(built.strategy.figures(recorder, built.world, dt_s))
+    return figs
+
+
+__all__ = ["Built", "RunOutcome", "TetherError", "build", "build_world", "run", "run_figures"]

@@ -1,42 +1,56 @@
-"""The shared time loop and the ``Strategy`` protocol.
+"""The one time loop of tether, and the plug-in contract every strategy follows.
 
 One step of every simulation::
 
-    obs   = sense(world, positions)          # who senses whom, noisy relative positions
-    state = strategy.step(ctx)               # the strategy moves the team (its own dynamics)
-    recorder.record(step, state, obs)        # per-step records, metrics, events
+    state = strategy.step(ctx)                      # decide and move (the strategy's dynamics)
+    obs   = strategy.sense(state, world, sensor)    # who is linked to whom after the move
+    recorder.record(metrics(state, obs), ...)       # per-step records, values, events
 
-A strategy owns its motion model (a kinematic step for the non-communicating
-strategy, the damped double integrator for the continuous one), built from the
-shared functions in :mod:`tether.dynamics`.
+Step 0 records the initial state. A strategy owns its motion model (a
+kinematic step for the non-communicating strategy, the damped double
+integrator of eq. (1) for the continuous one, robots following grid paths for
+the exploration strategies), and may bring its own world model: the grid
+exploration simulator of the recurrent-connectivity paper plugs in through the
+``sense`` hook (its communication graph, with the base station as a fixed
+node) and ``step_values`` / ``robot_values`` (explored area, who is connected),
+so that the loop, the records, the summary and the run folder are the same for
+every strategy.
 """
 
 from __future__ import annotations
 
 import time
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict
 
 from tether.graph import algebraic_connectivity, components, pairs_within
 from tether.sensing import Observation, SensorModel, sense
 from tether.world.world import World
 
-LAMBDA2_MAX_N = 500  # per-step lambda2 of the true graph is recorded up to this team size
+LAMBDA2_MAX_N = 500  # per-step lambda2 of the true graph is recorded up to this many nodes
 
 
 @dataclass
 class TeamState:
-    """Team state as arrays: ``positions`` and ``velocities`` are ``(n, dim)``."""
+    """Team state as arrays: ``positions`` and ``velocities`` are ``(n, dim)``.
+
+    ``fixed`` holds ``(k, dim)`` positions of fixed nodes of the team's graph
+    (a base station); in an :class:`~tether.sensing.Observation` they are the
+    nodes ``n .. n + k - 1`` after the robots.
+    """
 
     positions: np.ndarray
     velocities: np.ndarray
+    fixed: np.ndarray | None = None
 
     @classmethod
-    def at_rest(cls, positions: np.ndarray) -> TeamState:
+    def at_rest(cls, positions: np.ndarray, fixed: np.ndarray | None = None) -> TeamState:
         positions = np.array(positions, dtype=float)
-        return cls(positions, np.zeros_like(positions))
+        return cls(positions, np.zeros_like(positions), fixed)
 
     @property
     def n(self) -> int:
@@ -47,7 +61,8 @@ class TeamState:
         return self.positions.shape[1]
 
     def copy(self) -> TeamState:
-        return TeamState(self.positions.copy(), self.velocities.copy())
+        fixed = None if self.fixed is None else self.fixed.copy()
+        return TeamState(self.positions.copy(), self.velocities.copy(), fixed)
 
 
 @dataclass
@@ -63,48 +78,115 @@ class StepContext:
     rng: np.random.Generator
 
 
-@runtime_checkable
-class Strategy(Protocol):
-    """What the simulator needs from a connectivity strategy."""
+class NoParams(BaseModel):
+    """The ``Params`` of a strategy without parameters (``strategy.params`` must be empty)."""
 
-    name: str
-
-    def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None: ...
-
-    def step(self, ctx: StepContext) -> TeamState: ...
-
-    def done(self) -> bool: ...
-
-    def metrics(self) -> dict[str, Any]: ...
-
-    def drain_events(self) -> list[dict[str, Any]]: ...
+    model_config = ConfigDict(extra="forbid")
 
 
-class StrategyBase:
-    """Convenience base: event buffer, never done, no extra metrics."""
+class Strategy(ABC):
+    """The plug-in contract of a connectivity strategy.
 
-    name = "base"
+    Required
+        ``Params`` (a pydantic model of the scenario's ``strategy.params``),
+        :meth:`from_scenario` and :meth:`step`.
+    Optional (with defaults)
+        :meth:`initial_state` (place the team yourself), :meth:`reset`,
+        :meth:`sense` (your own interaction graph), :meth:`done`,
+        :meth:`metrics` (summary keys), :meth:`step_values` /
+        :meth:`robot_values` (extra per-step / per-robot columns),
+        :meth:`figures` (extra PNGs for the run folder).
+
+    Register a strategy with ``@STRATEGIES.register("name")``
+    (:mod:`tether.registry`); ``tether run`` then runs it from YAML.
+    """
+
+    name: ClassVar[str] = "strategy"
+    Params: ClassVar[type[BaseModel]] = NoParams
 
     def __init__(self) -> None:
         self._events: list[dict[str, Any]] = []
         self._step = 0
 
-    def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
-        self._events.clear()
+    # -- construction ------------------------------------------------------------------
+    @classmethod
+    def initial_state(
+        cls, params: Any, scenario: Any, world: World, rng: np.random.Generator
+    ) -> TeamState | None:
+        """The team's initial state, or ``None`` to use the scenario's ``team.init``."""
+        return None
 
+    @classmethod
+    @abstractmethod
+    def from_scenario(
+        cls,
+        params: Any,
+        scenario: Any,
+        world: World,
+        initial: TeamState,
+        rng: np.random.Generator,
+    ) -> Strategy:
+        """Build the strategy from its validated ``params`` and the scenario.
+
+        Raise :class:`tether.errors.ScenarioError` (one line: file, field, fix)
+        for anything the scenario asks that cannot run.
+        """
+
+    # -- the loop ------------------------------------------------------------------------
+    def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
+        """Called once before the first step (and before step 0 is recorded)."""
+        self._events.clear()
+        self._step = 0
+
+    @abstractmethod
+    def step(self, ctx: StepContext) -> TeamState:
+        """Move the team by one step of ``ctx.dt_s`` and return its new state."""
+
+    def sense(
+        self,
+        state: TeamState,
+        world: World,
+        sensor: SensorModel | None,
+        rng: np.random.Generator,
+    ) -> Observation:
+        """Who senses whom in ``state`` (default: :func:`tether.sensing.sense`)."""
+        if sensor is None:
+            raise ValueError(f"strategy {self.name!r} senses with a SensorModel; none given")
+        return sense(state.positions, sensor, rng, world)
+
+    def done(self) -> bool:
+        """True ends the run early (e.g. the leader reached its goal)."""
+        return False
+
+    # -- results -------------------------------------------------------------------------
+    def metrics(self) -> dict[str, Any]:
+        """The strategy's own keys of ``summary.json`` (called once, after the run)."""
+        return {}
+
+    def step_values(self) -> dict[str, Any]:
+        """Extra ``steps.parquet`` columns for the step just recorded (scalars)."""
+        return {}
+
+    def robot_values(self) -> dict[str, np.ndarray]:
+        """Extra ``robots.parquet`` columns for the step just recorded, ``(n,)`` each."""
+        return {}
+
+    def figures(self, recording: Any, world: World, dt_s: float) -> dict[str, Any]:
+        """Extra matplotlib figures ``{file name: figure}`` for ``figures/``.
+
+        ``recording`` is the :class:`tether.record.TrajectoryRecorder` of the run.
+        A name equal to a standard figure (``snapshot.png``) replaces it.
+        """
+        return {}
+
+    # -- events --------------------------------------------------------------------------
     def emit(self, kind: str, robot: int = -1, **data: Any) -> None:
-        """Record an event (role change, plan, election, ...) for the run folder."""
+        """Record an event (role change, plan, election, ...) for ``events.parquet``."""
         self._events.append({"step": self._step, "kind": kind, "robot": int(robot), **data})
 
     def drain_events(self) -> list[dict[str, Any]]:
         out, self._events = self._events, []
         return out
-
-    def done(self) -> bool:
-        return False
-
-    def metrics(self) -> dict[str, Any]:
-        return {}
 
 
 @dataclass
@@ -124,11 +206,15 @@ class StepRecord:
 def team_metrics(
     step: int, t_s: float, positions: np.ndarray, obs: Observation, collision_distance_m: float
 ) -> StepRecord:
-    """Connectivity and safety metrics of the true interaction graph at one step."""
-    n = len(positions)
+    """Connectivity and safety metrics of the true interaction graph at one step.
+
+    The graph has ``obs.n`` nodes: the robots, then any fixed nodes (a base
+    station). Collisions count robot pairs closer than ``collision_distance_m``.
+    """
+    n = obs.n
     n_comp, _ = components(n, obs.pairs)
     lam = float("nan")
-    if n <= LAMBDA2_MAX_N:  # full dense eigh up to 400 robots: the recorded values since 0.1
+    if n <= LAMBDA2_MAX_N:  # full dense eigh up to 400 nodes: the recorded values since 0.1
         lam = algebraic_connectivity(n, obs.pairs, method="dense" if n <= 400 else "sparse")
     close = pairs_within(positions, collision_distance_m) if collision_distance_m > 0 else []
     if n > 1 and len(obs.pairs):
@@ -155,14 +241,22 @@ class RunResult:
 
 
 class Recorder(Protocol):
+    """Receives every step: team metrics, state, observation, events and extra values."""
+
     def record(
-        self, rec: StepRecord, state: TeamState, obs: Observation, events: list[dict]
+        self,
+        rec: StepRecord,
+        state: TeamState,
+        obs: Observation,
+        events: list[dict[str, Any]],
+        values: dict[str, Any],
+        robot_values: dict[str, np.ndarray],
     ) -> None: ...
 
 
 def simulate(
     world: World,
-    sensor: SensorModel,
+    sensor: SensorModel | None,
     strategy: Strategy,
     initial: TeamState,
     *,
@@ -176,24 +270,38 @@ def simulate(
 
     Step 0 records the initial state; every later step records the state after
     the strategy has moved. The run is fully determined by the inputs and ``rng``.
+    ``sensor`` may be ``None`` for strategies that bring their own ``sense``.
     """
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError("rng must be a numpy.random.Generator, e.g. np.random.default_rng(0)")
+    if not (np.isfinite(dt_s) and dt_s > 0):
+        raise ValueError(f"dt_s must be a positive finite number (got {dt_s!r})")
+    if int(max_steps) != max_steps or max_steps < 0:
+        raise ValueError(f"max_steps must be a non-negative integer (got {max_steps!r})")
     start = time.perf_counter()
     state = initial.copy()
     strategy.reset(world, state, rng)
     records: list[StepRecord] = []
-    obs = sense(state.positions, sensor, rng, world)
+    obs = strategy.sense(state, world, sensor, rng)
     step = 0
     while True:
         rec = team_metrics(step, step * dt_s, state.positions, obs, collision_distance_m)
         records.append(rec)
         if recorder is not None:
-            recorder.record(rec, state, obs, strategy.drain_events())
+            recorder.record(
+                rec,
+                state,
+                obs,
+                strategy.drain_events(),
+                strategy.step_values(),
+                strategy.robot_values(),
+            )
         if step >= max_steps or strategy.done():
             break
         ctx = StepContext(step, step * dt_s, dt_s, world, state, obs, rng)
         state = strategy.step(ctx)
         step += 1
-        obs = sense(state.positions, sensor, rng, world)
+        obs = strategy.sense(state, world, sensor, rng)
     return RunResult(
         steps=step,
         sim_time_s=step * dt_s,

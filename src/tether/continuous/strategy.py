@@ -38,7 +38,7 @@ from tether.continuous.params import TABLE2, ConnectivityParams
 from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
 from tether.registry import STRATEGIES
-from tether.sim import StepContext, StrategyBase, TeamState
+from tether.sim import StepContext, Strategy, TeamState
 from tether.world.clearance import ObstacleIndex
 from tether.world.world import World
 
@@ -187,7 +187,7 @@ def _unsafe_start(lam: float, conn: ConnectivityParams) -> str:
 
 
 @STRATEGIES.register("connectivity")
-class ConnectivityStrategy(StrategyBase):
+class ConnectivityStrategy(Strategy):
     """Generalized connectivity force plus an external force (eq. (1), App. A)."""
 
     name = "connectivity"

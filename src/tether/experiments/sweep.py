@@ -2,7 +2,7 @@
 
 Each trial writes its own run folder ``<out>/<combo>/seed-<k>/``; a trial whose
 ``summary.json`` exists is not run again, so a killed sweep resumes where it
-stopped without losing or redoing work (run folders are written atomically).
+stopped without losing or redoing work (run folders are committed whole).
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ import pyarrow.parquet as pq
 from tether.config import Scenario, scenario_from_dict, set_dotted
 from tether.errors import TetherError
 from tether.experiments.executors import Trial, execute
-from tether.record import RunFolder
+from tether.runfolder import save_figure, write_rows
+from tether.viz.plots import links_over_time, series_over_time
 
 
 @dataclass
@@ -69,6 +70,50 @@ def trials_of(
     return trials
 
 
+@dataclass
+class TrialsOutcome:
+    """Summaries of the finished trials by run folder, failures as one line each."""
+
+    summaries: dict[str, dict[str, Any]]
+    errors: list[str]
+    n_skipped: int
+
+
+def run_trials(
+    trials: list[Trial],
+    *,
+    executor: str = "serial",
+    workers: int | None = None,
+    address: str | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> TrialsOutcome:
+    """Run the trials whose run folder has no ``summary.json`` yet; reuse the others.
+
+    Run folders are committed whole (:class:`tether.runfolder.RunFolder`), so
+    a folder with ``summary.json`` is a finished trial: a killed sweep resumes
+    without losing or redoing work.
+    """
+    summaries: dict[str, dict[str, Any]] = {}
+    todo = []
+    for trial in trials:
+        summary_file = Path(trial.run_dir) / "summary.json"
+        if summary_file.exists():
+            summaries[trial.run_dir] = json.loads(summary_file.read_text())
+        else:
+            todo.append(trial)
+    errors: list[str] = []
+    for k, outcome in enumerate(execute(todo, executor, workers=workers, address=address), 1):
+        run_dir = outcome.trial.run_dir
+        if outcome.summary is None:
+            errors.append(f"{run_dir}: {outcome.error}")
+        else:
+            summaries[run_dir] = outcome.summary
+        if progress:
+            status = "failed" if outcome.summary is None else "done"
+            progress(f"[{k}/{len(todo)}] {run_dir} {status}")
+    return TrialsOutcome(summaries, errors, len(trials) - len(todo))
+
+
 def run_sweep(
     scenario: Scenario,
     out_dir: str | Path,
@@ -87,25 +132,11 @@ def run_sweep(
     the first failure is raised as a one-line :class:`TetherError`.
     """
     trials = trials_of(scenario, out_dir, seeds)
-    summaries: dict[str, dict[str, Any]] = {}
-    todo = []
-    for _, trial in trials:
-        summary_file = Path(trial.run_dir) / "summary.json"
-        if summary_file.exists():
-            summaries[trial.run_dir] = json.loads(summary_file.read_text())
-        else:
-            todo.append(trial)
-    n_skipped = len(trials) - len(todo)
-    errors: list[str] = []
-    for k, outcome in enumerate(execute(todo, executor, workers=workers, address=address), 1):
-        run_dir = outcome.trial.run_dir
-        if outcome.summary is None:
-            errors.append(f"{run_dir}: {outcome.error}")
-        else:
-            summaries[run_dir] = outcome.summary
-        if progress:
-            status = "failed" if outcome.summary is None else "done"
-            progress(f"[{k}/{len(todo)}] {run_dir} {status}")
+    done = run_trials(
+        [t for _, t in trials], executor=executor, workers=workers, address=address,
+        progress=progress,
+    )  # fmt: skip
+    summaries, errors, n_skipped = done.summaries, done.errors, done.n_skipped
     rows: list[dict[str, Any]] = []
     for combo, trial in trials:
         if trial.run_dir not in summaries:
@@ -115,48 +146,47 @@ def run_sweep(
         rows.append(
             {**{f"param:{k}": v for k, v in combo.items()}, **flat, "run_dir": trial.run_dir}
         )
-    folder = RunFolder(Path(out_dir))
-    table = folder.write_rows("sweep.parquet", rows)
-    figure = sweep_figure(rows, scenario.team.n_robots)
-    figures = [folder.save_figure(*figure)] if figure is not None else []
+    table = write_rows(Path(out_dir) / "sweep.parquet", rows)
+    figures = [save_figure(fig, Path(out_dir) / "figures" / name)
+               for fig, name in sweep_figures(rows, scenario.team.n_robots)]  # fmt: skip
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise TetherError(f"{errors[0]}{more}; finished trials are in {table}")
     return SweepResult(table, len(rows), n_skipped, figures)
 
 
-# per-step column -> (x column, figure name, y label); the first one a run records is drawn
+# per-step column -> (x column, figure name, y label); one figure per column runs record
 _SWEEP_FIGURES = {
     "n_links": ("t_s", "links.png", "number of links"),
-    "explored_fraction": ("step", "explored.png", "explored fraction known at the BS"),
+    "explored_fraction": ("t_s", "explored.png", "explored fraction known at the BS"),
 }
 
 
-def sweep_figure(rows: list[dict[str, Any]], n_robots: int) -> tuple[Any, str] | None:
-    """A per-step metric of the first seed of each combination, one line per combination.
+def sweep_figures(rows: list[dict[str, Any]], n_robots: int) -> list[tuple[Any, str]]:
+    """Per-step metrics of the first seed of each combination, one line per combination.
 
-    Links over time where runs record them (the silent paper's Fig. 5), else the
-    explored fraction (exploration strategies); ``None`` when runs record neither.
+    Links over time (the silent paper's Fig. 5) and, where runs record it, the
+    explored fraction (exploration strategies).
     """
-    from tether.viz.plots import links_over_time, series_over_time
-
     files = [Path(r["run_dir"]) / "steps.parquet" for r in rows]
     files = [f for f in files if f.exists()]
     if not files:
-        return None
+        return []
     columns = set(pq.read_schema(files[0]).names)
-    metric = next((m for m in _SWEEP_FIGURES if m in columns), None)
-    if metric is None:
-        return None
-    x_col, name, ylabel = _SWEEP_FIGURES[metric]
-    series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    for row in rows:
-        label = combo_label({k[6:]: v for k, v in row.items() if k.startswith("param:")})
-        steps_file = Path(row["run_dir"]) / "steps.parquet"
-        if label in series or not steps_file.exists():
+    out = []
+    for metric, (x_col, name, ylabel) in _SWEEP_FIGURES.items():
+        if metric not in columns:
             continue
-        table = pq.read_table(steps_file, columns=[x_col, metric]).to_pydict()
-        series[label] = (np.asarray(table[x_col]), np.asarray(table[metric]))
-    if metric == "n_links":
-        return links_over_time(series, n_robots), name
-    return series_over_time(series, x_col, ylabel), name
+        series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        for row in rows:
+            label = combo_label({k[6:]: v for k, v in row.items() if k.startswith("param:")})
+            steps_file = Path(row["run_dir"]) / "steps.parquet"
+            if label in series or not steps_file.exists():
+                continue
+            table = pq.read_table(steps_file, columns=[x_col, metric]).to_pydict()
+            series[label] = (np.asarray(table[x_col]), np.asarray(table[metric]))
+        if metric == "n_links":
+            out.append((links_over_time(series, n_robots), name))
+        else:
+            out.append((series_over_time(series, "time (s)", ylabel), name))
+    return out

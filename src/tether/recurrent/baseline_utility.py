@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from tether.recurrent.expgraph import snap_cluster, window_counts
-from tether.recurrent.exploration import ExplorationSim, GoalKind
-from tether.recurrent.frontiers import frontier_clusters
+from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
+from tether.recurrent.planning.expgraph import snap_cluster, window_counts
+from tether.recurrent.planning.frontiers import frontier_clusters
 
 __all__ = ["UtilityStrategy"]
 

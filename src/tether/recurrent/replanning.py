@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from tether.recurrent.configuration import check_configuration, optimal_configuration
-from tether.recurrent.expgraph import FRONTIER, ExplorationGraph, GraphBuilder
-from tether.recurrent.exploration import ExplorationSim, GoalKind
-from tether.recurrent.readiness import ReadinessTracker, relay_paths
+from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
+from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
+from tether.recurrent.planning.expgraph import FRONTIER, ExplorationGraph, GraphBuilder
+from tether.recurrent.planning.readiness import ReadinessTracker, relay_paths
 
 __all__ = ["RecurrentStrategy", "frontier_utilities"]
 
@@ -276,7 +276,7 @@ class RecurrentStrategy:
         row: dict[int, int],
     ) -> tuple[dict[int, int], set[int]]:
         """Sec. V deployment (:func:`tether.recurrent.deployment.optimal_deployment`)."""
-        from tether.recurrent.deployment import optimal_deployment
+        from tether.recurrent.planning.deployment import optimal_deployment
 
         ready_set = {int(r) for r in ready_ids}
         busy = {int(r): int(goal_v[r]) for r in movable if int(r) not in ready_set}

@@ -14,9 +14,10 @@ This is a long experiment (benchmark-like), not a test::
 
     python -m tether.recurrent.report OUT_DIR --runs 5 --steps 900
 
-Every run is written as a run folder (Parquet + ``summary.json``) under
-``OUT_DIR/runs/<map>/<setting>/run<k>``; finished runs are reused when the
-report is run again. Figures go to ``OUT_DIR/fig4_<map>.png``,
+Every run is a trial of :mod:`tether.experiments` (a run folder under
+``OUT_DIR/runs/<map>/<setting>/seed-<k>``, seed ``k`` placing the BS as
+``tether run scenarios/recurrent_<map>.yaml --seed k`` does); finished runs
+are reused when the report is run again, like every sweep. Figures go to ``OUT_DIR/fig4_<map>.png``,
 ``fig5.png`` and ``fig6.png``; final explored fractions (and out-of-comm
 times, planning times) to ``OUT_DIR/report.json``.
 """
@@ -26,62 +27,19 @@ from __future__ import annotations
 import json
 import os
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from tether.record import machine
+from tether.experiments.executors import Trial
+from tether.experiments.sweep import run_trials
+from tether.runfolder import machine
 
-__all__ = ["make_report", "plot_map", "plot_run", "run_one"]
+__all__ = ["make_report", "trial_scenario"]
 
 MAPS_DIR = Path(__file__).resolve().parents[3] / ".." / "shared" / "maps"
 MAP_LABELS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
-
-
-# ---------------------------------------------------------------------- plots
-def plot_run(result: Any) -> Any:
-    """Explored fraction at the BS and robots connected, over time (one run)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 3.5))
-    t = np.arange(len(result.explored))
-    ax.plot(t, 100 * result.explored, label="explored (known at BS)")
-    ax2 = ax.twinx()
-    ax2.plot(t, result.connected.sum(axis=1), color="tab:orange", lw=0.8, alpha=0.6)
-    ax2.set_ylabel("robots connected to BS", color="tab:orange")
-    ax.set_xlabel("step")
-    ax.set_ylabel("explored area [%]")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return fig
-
-
-def plot_map(sim: Any, result: Any) -> Any:
-    """Map known at the BS at the end, trajectories, BS position."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    img = np.full(sim.shape, 0.6)
-    known = sim.knowledge.global_known
-    img[known & ~sim.occupied] = 1.0
-    img[known & sim.occupied] = 0.0
-    fig, ax = plt.subplots(figsize=(7, 7 * sim.shape[1] / max(sim.shape[0], 1)))
-    ax.imshow(img.T, origin="lower", cmap="gray", vmin=0, vmax=1, interpolation="nearest")
-    pos = result.positions
-    for r in range(pos.shape[1]):
-        ax.plot(pos[:, r, 0] - 0.5, pos[:, r, 1] - 0.5, lw=0.7)
-    ax.plot(*(sim.base - 0.5), "s", color="green", ms=8, label="BS")
-    ax.scatter(pos[-1, :, 0] - 0.5, pos[-1, :, 1] - 0.5, s=12, c="blue", zorder=3)
-    ax.set_axis_off()
-    fig.tight_layout()
-    return fig
 
 
 # ---------------------------------------------------------------------- runs
@@ -94,7 +52,7 @@ def _run_dir(out: Path, m: str, label: str, settings: dict[str, dict[str, Any]],
     """
     same = [name for name, s in settings.items() if s == settings[label]]
     canonical = same[-1]  # theta<k> labels come after the Fig. 4 ones
-    return out / "runs" / m / canonical / f"run{k}"
+    return out / "runs" / m / canonical / f"seed-{k}"
 
 
 def _settings(thetas: tuple[int, ...]) -> dict[str, dict[str, Any]]:
@@ -110,60 +68,31 @@ def _settings(thetas: tuple[int, ...]) -> dict[str, dict[str, Any]]:
     return out
 
 
-def run_one(
-    map_path: str,
-    setting: dict[str, Any],
-    seed: int,
-    steps: int,
-    n_robots: int,
-    run_dir: str,
-    check: bool = False,
+def trial_scenario(
+    map_path: Path, setting: dict[str, Any], steps: int, n_robots: int, check: bool = False
 ) -> dict[str, Any]:
-    """One run of one setting; writes its run folder and returns the summary."""
-    from tether.record import RunFolder
-    from tether.recurrent.baseline_utility import UtilityStrategy
-    from tether.recurrent.exploration import ExplorationConfig, ExplorationSim, random_base
-    from tether.recurrent.replanning import RecurrentStrategy
-    from tether.recurrent.strategy import run_summary, write_run
-    from tether.world.maps import load_map
-
-    path = Path(run_dir)
-    done = path / "summary.json"
-    if done.exists():
-        return json.loads(done.read_text())
-    # black (0) is an obstacle, anything else free (../shared/maps/README.md)
-    occupied = load_map(map_path, occupied_thresh=0.999, free_thresh=0.998).occupied
-    cfg = ExplorationConfig(n_robots=n_robots, steps=steps)
-    base = random_base(occupied, cfg.coarse_factor, np.random.default_rng(seed))
+    """The scenario of one setting on one map (the paper's Sec. VII-A at 0.1 m per cell)."""
     if setting["kind"] == "utility":
-        strategy: Any = UtilityStrategy(ratio=0.5)
+        strategy: dict[str, Any] = {"name": "utility", "params": {"ratio": 0.5}}
     else:
-        strategy = RecurrentStrategy(
-            theta=setting["theta"],
-            method=setting["method"],
-            delta=4,
-            count_planning_time=setting["timed"],
-            check=check,
-        )
-    import time
-
-    tic = time.perf_counter()
-    sim = ExplorationSim(occupied, base, strategy, cfg)
-    strategy.start(sim)
-    for _ in range(steps):
-        sim.step()
-    result = sim.result(time.perf_counter() - tic)
-    summary = run_summary(
-        result,
-        scenario=Path(map_path).stem,
-        strategy=strategy.name,
-        seed=seed,
-        n_robots=n_robots,
-    )
-    summary["setting"] = setting
-    summary["base_cells"] = sim.base.tolist()
-    write_run(RunFolder(path), result, summary, figures=False)
-    return summary
+        strategy = {
+            "name": "recurrent",
+            "params": {"theta": setting["theta"], "method": setting["method"], "delta": 4,
+                       "count_planning_time": setting["timed"], "check": check},
+        }  # fmt: skip
+    return {
+        "name": f"recurrent-report-{map_path.stem}",
+        "seed": 0,
+        # black (0) is an obstacle, anything else free (../shared/maps/README.md)
+        "world": {"scene": "map", "dim": 2, "params": {
+            "path": str(map_path.resolve()), "resolution_m": 0.1,
+            "occupied_thresh": 0.999, "free_thresh": 0.998}},
+        "team": {"n_robots": n_robots},
+        "sensing": {"range_m": 5.0},
+        "sim": {"dt_s": 1.0, "max_steps": steps},
+        "strategy": strategy,
+        "output": {"record_every": 1, "figures": False},
+    }  # fmt: skip
 
 
 def _curve(run_dir: Path) -> np.ndarray:
@@ -214,31 +143,26 @@ def make_report(
     mdir = Path(maps_dir) if maps_dir is not None else MAPS_DIR
     all_settings = _settings(tuple(thetas))
     chosen = {k: v for k, v in all_settings.items() if settings is None or k in settings}
-    jobs = []
+    trials: list[Trial] = []
+    keys: dict[str, list[tuple[str, str, int]]] = {}  # run folder -> (map, label, k)
     for m in maps:
         map_path = mdir / f"{m}.png"
         if not map_path.exists():
             raise FileNotFoundError(f"{map_path}: map not found (give maps_dir)")
         for label, setting in chosen.items():
+            data = trial_scenario(map_path, setting, steps, n_robots, check)
             for k in range(runs):
-                run_dir = _run_dir(out, m, label, all_settings, k)
-                jobs.append(
-                    (m, label, k, (str(map_path), setting, k, steps, n_robots, str(run_dir), check))
-                )
+                run_dir = str(_run_dir(out, m, label, all_settings, k))
+                if run_dir not in keys:  # identical settings share their runs
+                    trials.append(Trial(data, f"report:{m}/{label}", str(mdir), k, run_dir))
+                keys.setdefault(run_dir, []).append((m, label, k))
     summaries: dict[tuple[str, str, int], dict[str, Any]] = {}
-    with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
-        # submit the importable function (not ``__main__.run_one``) so workers can unpickle it
-        from tether.recurrent.report import run_one as job
-
-        by_dir: dict[str, Any] = {}  # one job per run folder (shared by identical settings)
-        pending = []
-        for m, label, k, args in jobs:
-            if args[5] not in by_dir:
-                by_dir[args[5]] = pool.submit(job, *args)
-            pending.append((by_dir[args[5]], (m, label, k)))
-        for fut, key in pending:
-            summaries[key] = fut.result()
-            s = summaries[key]
+    outcome = run_trials(trials, executor="processes", workers=workers or os.cpu_count())
+    if outcome.errors:
+        raise RuntimeError("; ".join(outcome.errors[:3]))
+    for run_dir, s in outcome.summaries.items():
+        for key in keys[run_dir]:
+            summaries[key] = s
             print(
                 f"{key[0]:8s} {key[1]:16s} run{key[2]}: explored {s['final_explored_fraction']:.3f}"
                 f" out-of-comm {s['out_of_comm_mean_steps']:.0f} wall {s['wall_time_s']:.1f}s",

@@ -2,7 +2,7 @@
 
 ``python -m tether.recurrent.report_tables OUT_DIR`` prints the tables of
 ``docs/recurrent.md`` for the runs that :mod:`tether.recurrent.report` wrote under
-``OUT_DIR/runs/<map>/<setting>/run<k>``: explored area known at the BS after 300,
+``OUT_DIR/runs/<map>/<setting>/seed-<k>``: explored area known at the BS after 300,
 600 and 900 steps (mean over runs, and mean ± sample sd at the end), the time robots
 spend out of communication (steps per robot), and per-plan solver times.
 """
@@ -31,7 +31,7 @@ FIG5 = ("theta1", "theta3", "theta6", "theta9", "theta12", "utility")
 
 def _runs(out: Path, m: str, setting: str) -> list[Path]:
     return sorted(
-        p for p in (out / "runs" / m / setting).glob("run*") if (p / "summary.json").exists()
+        p for p in (out / "runs" / m / setting).glob("seed-*") if (p / "summary.json").exists()
     )
 
 

@@ -1,9 +1,11 @@
 """Registered exploration strategies ``recurrent`` and ``utility`` for YAML runs.
 
-These strategies have their own time loop (the grid exploration simulator of
-:mod:`tether.recurrent.exploration`), so instead of the continuous-space
-``Strategy`` protocol they provide ``run_scenario(scenario, out_dir, rng)``,
-which the runner calls. Scenario fields used:
+Both run the grid exploration simulator of :mod:`tether.recurrent.exploration`
+under the core loop (:class:`~tether.recurrent.exploration.run.ExplorationRun`):
+the team starts on the coarse cells nearest the base station (a fixed node of
+the communication graph), and the policy is the BS planner
+(:class:`~tether.recurrent.replanning.RecurrentStrategy`) or the Utility
+baseline. Scenario fields used:
 
 * ``world``: any 2-D scene with an occupancy grid, typically
   ``scene: map`` with ``params: {path: ..., resolution_m: 0.1}`` or the
@@ -17,32 +19,32 @@ which the runner calls. Scenario fields used:
 
 from __future__ import annotations
 
-import time
-from pathlib import Path
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from tether.errors import ScenarioError
-from tether.graph import pairs_within
 from tether.recurrent.baseline_utility import UtilityStrategy
-from tether.recurrent.exploration import (
+from tether.recurrent.exploration.run import ExplorationRun
+from tether.recurrent.exploration.sim import (
     ExplorationConfig,
-    ExplorationResult,
-    ExplorationSim,
+    ExplorationPolicy,
     random_base,
+    start_cells,
 )
+from tether.recurrent.figures import explored_over_time, known_map
 from tether.recurrent.replanning import RecurrentStrategy
 from tether.registry import LINK_MODELS, STRATEGIES
+from tether.sim import TeamState
+from tether.world.grid import OccupancyGrid
+from tether.world.world import World
 
 __all__ = [
     "RecurrentExploration",
     "RecurrentParams",
     "UtilityExploration",
     "UtilityParams",
-    "run_summary",
-    "write_run",
 ]
 
 
@@ -107,167 +109,77 @@ def _config(params: ExplorationParams, scenario: Any, resolution_m: float) -> Ex
     )
 
 
-def run_summary(
-    result: ExplorationResult,
-    *,
-    scenario: str,
-    strategy: str,
-    seed: int,
-    n_robots: int,
-    dt_s: float = 1.0,
-    collision_distance_cells: float = 0.0,
-) -> dict[str, Any]:
-    """Scalar results of an exploration run (the ``summary.json`` keys).
+class _ExplorationPlugin(ExplorationRun):
+    """Shared construction of the registered exploration strategies from a scenario."""
 
-    Besides the exploration metrics, the core keys of every tether run, for the
-    communication graph of the robots and the BS: ``connected_all_steps`` (every
-    robot linked to the BS at every step; recurrent connectivity allows otherwise),
-    ``min_links``, ``min_lambda2`` (unweighted) and ``collisions`` (robot pairs
-    closer than ``collision_distance_cells``, summed over steps: robots are points
-    here and do not avoid each other).
-    """
-    steps = len(result.explored) - 1
-    out_steps = (~result.connected[1:]).sum(axis=0) if steps else np.zeros(n_robots)
-    collisions = 0
-    if collision_distance_cells > 0:
-        collisions = sum(len(pairs_within(p, collision_distance_cells)) for p in result.positions)
-    graph = {}
-    if result.n_links is not None and result.lambda2 is not None:
-        graph = {
-            "min_links": int(result.n_links.min()),
-            "min_lambda2": float(result.lambda2.min()),
+    Params: ClassVar[type[ExplorationParams]] = ExplorationParams
+
+    @classmethod
+    def make_policy(cls, params: Any) -> ExplorationPolicy:
+        raise NotImplementedError
+
+    @staticmethod
+    def _grid(scenario: Any, world: World) -> OccupancyGrid:
+        grid = world.grid
+        if grid is None or grid.dim != 2:
+            raise ScenarioError(
+                f"{scenario.source}: world: exploration needs a 2-D occupancy grid "
+                "(scene 'map', or a procedural scene with dim: 2)"
+            )
+        return grid
+
+    @classmethod
+    def initial_state(
+        cls, params: Any, scenario: Any, world: World, rng: np.random.Generator
+    ) -> TeamState:
+        """Robots on the coarse cells nearest the BS (random unless ``base_m`` is given)."""
+        grid = cls._grid(scenario, world)
+        cfg = _config(params, scenario, grid.resolution_m)
+        if params.base_m is not None:
+            base = (np.asarray(params.base_m, float) - grid.origin_m) / grid.resolution_m
+        else:
+            base = random_base(grid.occupied, cfg.coarse_factor, rng)
+        base, starts = start_cells(grid.occupied, base, cfg.n_robots, cfg.coarse_factor)
+        to_m = grid.origin_m + np.vstack([starts, base[None]]) * grid.resolution_m
+        return TeamState.at_rest(to_m[:-1], fixed=to_m[-1:])
+
+    @classmethod
+    def from_scenario(
+        cls,
+        params: Any,
+        scenario: Any,
+        world: World,
+        initial: TeamState,
+        rng: np.random.Generator,
+    ) -> _ExplorationPlugin:
+        grid = cls._grid(scenario, world)
+        cfg = _config(params, scenario, grid.resolution_m)
+        base_cells = (np.asarray(initial.fixed[0]) - grid.origin_m) / grid.resolution_m
+        return cls(cls.make_policy(params), cfg, grid, base_cells)
+
+    def figures(self, recording: Any, world: World, dt_s: float) -> dict[str, Any]:
+        steps = recording.step_columns()
+        t = np.asarray(steps["step"]) * dt_s
+        trails = np.stack(recording.positions)
+        return {
+            "explored.png": explored_over_time(
+                t, np.asarray(steps["explored_fraction"]), np.asarray(steps["n_connected"])
+            ),
+            "map.png": known_map(
+                self.grid, self.sim.knowledge.global_known, trails, self.to_m(self.sim.base)
+            ),
         }
-    return {
-        "scenario": scenario,
-        "strategy": strategy,
-        "seed": seed,
-        "n_robots": n_robots,
-        "sim_time_s": steps * dt_s,
-        "steps": steps,
-        "wall_time_s": result.wall_time_s,
-        "connected_all_steps": bool(result.connected.all()),
-        **graph,
-        "collisions": int(collisions),
-        "final_explored_fraction": float(result.explored[-1]),
-        "out_of_comm_mean_steps": float(np.mean(out_steps)),
-        "out_of_comm_max_steps": int(np.max(out_steps)),
-        "out_of_comm_per_robot_steps": out_steps.tolist(),
-        **result.metrics,
-        "timing_s": result.timing_s,
-    }
-
-
-def write_run(
-    folder: Any,
-    result: ExplorationResult,
-    summary: dict[str, Any],
-    *,
-    resolution_m: float = 1.0,
-    origin_m: np.ndarray | None = None,
-    record_every: int = 1,
-    figures: bool = False,
-    sim: ExplorationSim | None = None,
-) -> None:
-    """Write an exploration run into a :class:`tether.record.RunFolder`.
-
-    Files: ``steps.parquet`` (step, explored fraction, robots connected),
-    ``robots.parquet`` (step, robot, x_m, y_m, connected), ``events.parquet``
-    (plans with planning times, aborts, returns), ``summary.json`` and, with
-    ``figures``, ``figures/explored.png`` and ``figures/map.png``.
-    """
-    from tether.record import provenance
-
-    origin = np.zeros(2) if origin_m is None else np.asarray(origin_m, float)
-    steps = np.arange(len(result.explored))
-    folder.write_table(
-        "steps.parquet",
-        {
-            "step": steps,
-            "explored_fraction": result.explored,
-            "n_connected": result.connected.sum(axis=1),
-        },
-    )
-    keep = steps[:: max(int(record_every), 1)]
-    pos = result.positions[keep]  # (T, n, 2) cells
-    t, n, _ = pos.shape
-    world = origin + pos * resolution_m
-    folder.write_table(
-        "robots.parquet",
-        {
-            "step": np.repeat(keep, n),
-            "robot": np.tile(np.arange(n), t),
-            "x_m": world[:, :, 0].ravel(),
-            "y_m": world[:, :, 1].ravel(),
-            "connected": result.connected[keep].ravel(),
-        },
-    )
-    folder.write_rows("events.parquet", result.events)
-    folder.write_json("summary.json", {**summary, "provenance": provenance()})
-    if figures:
-        from tether.recurrent.report import plot_map, plot_run
-
-        folder.save_figure(plot_run(result), "explored.png")
-        if sim is not None:
-            folder.save_figure(plot_map(sim, result), "map.png")
-
-
-def _run(cls: type, strategy: Any, scenario: Any, out_dir: Path, rng: np.random.Generator) -> dict:
-    from tether.record import RunFolder
-    from tether.runner import build_world
-
-    params = cls.Params.model_validate(scenario.strategy.params)
-    world = build_world(scenario, rng)
-    grid = world.grid
-    if grid is None or grid.dim != 2:
-        raise ScenarioError(
-            f"{scenario.source}: world: exploration needs a 2-D occupancy grid "
-            "(scene 'map', or a procedural scene with dim: 2)"
-        )
-    cfg = _config(params, scenario, grid.resolution_m)
-    occupied = grid.occupied
-    if params.base_m is not None:
-        base = (np.asarray(params.base_m, float) - grid.origin_m) / grid.resolution_m
-    else:
-        base = random_base(occupied, cfg.coarse_factor, rng)
-    tic = time.perf_counter()
-    sim = ExplorationSim(occupied, base, strategy, cfg)
-    strategy.start(sim)
-    for _ in range(cfg.steps):
-        sim.step()
-    result = sim.result(time.perf_counter() - tic)
-    summary = run_summary(
-        result,
-        scenario=scenario.name,
-        strategy=scenario.strategy.name,
-        seed=int(scenario.seed),
-        n_robots=cfg.n_robots,
-        dt_s=scenario.sim.dt_s,
-        collision_distance_cells=scenario.sim.collision_distance_m / grid.resolution_m,
-    )
-    summary["base_m"] = (grid.origin_m + sim.base * grid.resolution_m).tolist()
-    summary["map_cells"] = list(occupied.shape)
-    summary["resolution_m"] = grid.resolution_m
-    write_run(
-        RunFolder(out_dir),
-        result,
-        summary,
-        resolution_m=grid.resolution_m,
-        origin_m=grid.origin_m,
-        record_every=scenario.output.record_every,
-        figures=scenario.output.figures,
-        sim=sim,
-    )
-    return summary
 
 
 @STRATEGIES.register("recurrent")
-class RecurrentExploration:
+class RecurrentExploration(_ExplorationPlugin):
     """Asynchronous exploration under recurrent connectivity (Banfi et al. 2016)."""
 
+    name = "recurrent"
     Params = RecurrentParams
 
     @classmethod
-    def make(cls, params: RecurrentParams) -> RecurrentStrategy:
+    def make_policy(cls, params: RecurrentParams) -> RecurrentStrategy:
         return RecurrentStrategy(
             theta=params.theta,
             method=params.method,
@@ -278,23 +190,14 @@ class RecurrentExploration:
             time_limit_s=params.time_limit_s,
         )
 
-    @classmethod
-    def run_scenario(cls, scenario: Any, out_dir: Path, rng: np.random.Generator) -> dict:
-        params = cls.Params.model_validate(scenario.strategy.params)
-        return _run(cls, cls.make(params), scenario, Path(out_dir), rng)
-
 
 @STRATEGIES.register("utility")
-class UtilityExploration:
+class UtilityExploration(_ExplorationPlugin):
     """The Utility baseline (de Hoog et al.) the paper compares with."""
 
+    name = "utility"
     Params = UtilityParams
 
     @classmethod
-    def make(cls, params: UtilityParams) -> UtilityStrategy:
+    def make_policy(cls, params: UtilityParams) -> UtilityStrategy:
         return UtilityStrategy(ratio=params.ratio)
-
-    @classmethod
-    def run_scenario(cls, scenario: Any, out_dir: Path, rng: np.random.Generator) -> dict:
-        params = cls.Params.model_validate(scenario.strategy.params)
-        return _run(cls, cls.make(params), scenario, Path(out_dir), rng)

@@ -19,7 +19,8 @@ from tether.errors import ScenarioError
 from tether.paths.trajectory import Polyline, TimeFunction
 from tether.registry import STRATEGIES
 from tether.silent.steering import constrained_steps, desired_steps
-from tether.sim import StepContext, StrategyBase, TeamState
+from tether.sim import StepContext, Strategy, TeamState
+from tether.viz.plots import snapshot
 from tether.world.world import World
 
 
@@ -80,7 +81,7 @@ def _load_function(spec: str) -> TimeFunction:
 
 
 @STRATEGIES.register("silent")
-class SilentStrategy(StrategyBase):
+class SilentStrategy(Strategy):
     """Leader-follower Local Steering Strategy (no communication, unlabelled robots)."""
 
     name = "silent"
@@ -257,6 +258,23 @@ class SilentStrategy(StrategyBase):
 
     def done(self) -> bool:
         return self._done
+
+    def figures(self, recording: Any, world: World, dt_s: float) -> dict[str, Any]:
+        """The paper's Fig. 4: the team at three instants, with the leader and its path."""
+        if not recording.positions:
+            return {}
+        idx = sorted({0, len(recording.positions) // 2, len(recording.positions) - 1})
+        path = self.trajectory.waypoints if isinstance(self.trajectory, Polyline) else None
+        return {
+            "snapshot.png": snapshot(
+                [recording.positions[i] for i in idx],
+                [recording.links[i] for i in idx],
+                [f"t = {recording.position_steps[i] * dt_s:g} s" for i in idx],
+                path=path,
+                leader=self.leader,
+                world=world,
+            )
+        }
 
     def metrics(self) -> dict[str, Any]:
         out: dict[str, Any] = {

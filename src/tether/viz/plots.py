@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
-    from tether.record import TrajectoryRecorder
-    from tether.runner import Built
+from matplotlib.figure import Figure  # noqa: E402
 
 
 def series_over_time(
@@ -79,32 +74,3 @@ def snapshot(
         ax.set_ylim(lo[1] - pad, hi[1] + pad)
     fig.tight_layout()
     return fig
-
-
-def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Figure]:
-    """The standard figures of a navigation run, plus the strategy's own."""
-    figs: dict[str, Figure] = {}
-    steps = recorder.step_columns()
-    if not steps:
-        return figs
-    dt = built.scenario.sim.dt_s
-    t = np.asarray(steps["step"]) * dt
-    n = built.initial.n
-    figs["links.png"] = links_over_time({built.scenario.name: (t, np.asarray(steps["n_links"]))}, n)
-    if recorder.positions:
-        idx = sorted({0, len(recorder.positions) // 2, len(recorder.positions) - 1})
-        strategy = built.strategy
-        path = getattr(getattr(strategy, "trajectory", None), "waypoints", None)
-        leader = getattr(strategy, "leader", None)
-        figs["snapshot.png"] = snapshot(
-            [recorder.positions[i] for i in idx],
-            [recorder.links[i] for i in idx],
-            [f"t = {recorder.position_steps[i] * dt:g} s" for i in idx],
-            path=path,
-            leader=leader,
-            world=built.world,
-        )
-    extra = getattr(built.strategy, "figures", None)
-    if callable(extra):
-        figs.update(extra(recorder))
-    return figs

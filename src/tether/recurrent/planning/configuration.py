@@ -17,7 +17,7 @@ Model (exactly the paper's)
 * ``fixed`` (keyword, default empty) are the goal vertices of the robots that
   are *not* ready. They stay in the configuration (constraint III) and act as
   relays: Sec. IV-A replaces them by fictitious edges from their neighbours
-  to ``b`` (see :func:`tether.recurrent._problem.build`).
+  to ``b`` (see :func:`tether.recurrent.planning.problem.build`).
 
 A configuration is a set ``Q`` of vertices for the ready robots with
 ``|Q| <= budget``, ``b`` and ``fixed`` excluded, such that ``Q + fixed + {b}``
@@ -32,11 +32,11 @@ Methods
     Eqs. (2)-(4) solved to proven optimality by branch-and-cut, the cut
     constraints (4) separated by max-flow (``backend="scip"``: a PySCIPOpt
     constraint handler; ``backend="highs"``: a HiGHS solve-separate-resolve
-    loop). See :mod:`tether.recurrent._ilp`.
+    loop). See :mod:`tether.recurrent.planning.ilp`.
 ``"apx"``
     Algorithm 1 with ``delta``: a ``k/delta`` approximation,
     ``k = min(|R^t|, |F^t|)``, exact when the optimum uses at most ``delta``
-    frontiers (Theorem 4.1). See :mod:`tether.recurrent._apx`.
+    frontiers (Theorem 4.1). See :mod:`tether.recurrent.planning.apx`.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from typing import Literal
 
 import networkx as nx
 
-from tether.recurrent import _problem
+from tether.recurrent.planning import problem as _problem
 
 __all__ = ["Configuration", "check_configuration", "optimal_configuration"]
 
@@ -138,7 +138,7 @@ def optimal_configuration(
     t0 = time.perf_counter()
     problem = _problem.build(graph, base, utilities, budget, fixed)
     if method == "apx":
-        from tether.recurrent._apx import solve_apx
+        from tether.recurrent.planning.apx import solve_apx
 
         if int(delta) != delta or delta < 1:
             raise ValueError(f"delta must be a positive integer (got {delta!r})")
@@ -151,7 +151,7 @@ def optimal_configuration(
             "apx",
         )
     elif method == "ilp":
-        from tether.recurrent._ilp import solve_ilp
+        from tether.recurrent.planning.ilp import solve_ilp
 
         res = solve_ilp(problem, backend=backend, time_limit_s=time_limit_s)
         verts, util, proven, upper, name = (

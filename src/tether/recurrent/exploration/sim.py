@@ -13,10 +13,12 @@ robots with a depth sensor explore a 2-D occupancy map from a base station
    the BS's *known* map, which is conservative); robots in one component
    exchange maps, and a component holding the BS flushes everything it knows
    to the BS (data gathered while disconnected is delivered on reconnection);
-4. the strategy (the BS planner of :mod:`tether.recurrent.replanning` or the
-   Utility baseline of :mod:`tether.recurrent.baseline_utility`) reacts;
-5. metrics: fraction of the free area known at the BS, robots out of
-   communication with the BS.
+4. the policy (the BS planner of :mod:`tether.recurrent.replanning` or the
+   Utility baseline of :mod:`tether.recurrent.baseline_utility`) reacts.
+
+The sim is a world model with no time loop or history of its own: the core
+loop (:func:`tether.sim.simulate`) steps it through the adapter of
+:mod:`tether.recurrent.exploration.run`, which records it like every run.
 
 Positions are continuous cell coordinates (cell ``(ix, iy)`` covers
 ``[ix, ix+1) x [iy, iy+1)``); one step is one second.
@@ -29,24 +31,22 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
-import scipy.sparse as sp
 from scipy import ndimage
-from scipy.sparse.csgraph import connected_components
 
-from tether.graph import algebraic_connectivity
-from tether.recurrent.geodesic import CoarseGrid
-from tether.recurrent.knowledge import Knowledge
-from tether.recurrent.links import LinkModel, link_pairs
-from tether.recurrent.sensor import DepthSensor
+from tether.graph import components
+from tether.paths.geodesic import CoarseGrid
+from tether.recurrent.exploration.knowledge import Knowledge
 from tether.registry import LINK_MODELS
+from tether.sensing.depth import DepthSensor
+from tether.sensing.links import LinkModel, link_pairs
 
 __all__ = [
     "ExplorationConfig",
-    "ExplorationResult",
+    "ExplorationPolicy",
     "ExplorationSim",
     "GoalKind",
-    "Strategy",
-    "run_exploration",
+    "random_base",
+    "start_cells",
 ]
 
 
@@ -78,8 +78,12 @@ class ExplorationConfig:
     scan_steps: int = 1  # steps a full rotation takes
 
 
-class Strategy(Protocol):
-    """Decision-making plugged into :class:`ExplorationSim` (called once per step)."""
+class ExplorationPolicy(Protocol):
+    """The decision-making of an exploration run: the BS planner or the Utility baseline.
+
+    :class:`ExplorationSim` calls ``update`` once per step after moving,
+    sensing and communicating; ``start`` once after the initial scans.
+    """
 
     name: str
 
@@ -88,21 +92,6 @@ class Strategy(Protocol):
     def update(self, sim: ExplorationSim) -> None: ...
 
     def metrics(self) -> dict[str, Any]: ...
-
-
-@dataclass
-class ExplorationResult:
-    """Time series and events of a run (see :meth:`ExplorationSim.result`)."""
-
-    explored: np.ndarray  # (T+1,) fraction of free area known at the BS, step 0..T
-    connected: np.ndarray  # (T+1, n) robot linked (multi-hop) to the BS
-    positions: np.ndarray  # (T+1, n, 2)
-    events: list[dict[str, Any]]
-    metrics: dict[str, Any]
-    wall_time_s: float
-    timing_s: dict[str, float]
-    n_links: np.ndarray | None = None  # (T+1,) links of the robots + BS communication graph
-    lambda2: np.ndarray | None = None  # (T+1,) its unweighted algebraic connectivity
 
 
 def _reachable_free(occupied: np.ndarray, start: np.ndarray) -> np.ndarray:
@@ -121,6 +110,27 @@ def random_base(occupied: np.ndarray, coarse_factor: int, rng: np.random.Generat
     return cg.centre(int(rng.choice(cand)))[0]
 
 
+def start_cells(
+    occupied: np.ndarray, base: np.ndarray, n: int, coarse_factor: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The BS snapped to the nearest traversable coarse cell centre, and the robots' starts.
+
+    Robots start on the ``n`` traversable coarse cells geodesically closest to
+    the BS (repeating the closest one if there are fewer). Cell coordinates.
+    """
+    true_coarse = CoarseGrid(~np.asarray(occupied, dtype=bool), coarse_factor)
+    bnode = true_coarse.nearest_node(np.asarray(base, float))
+    if bnode < 0:
+        raise ValueError("the map has no traversable cell for the base station")
+    d = true_coarse.distances([bnode])[0]
+    order = np.argsort(d, kind="stable")
+    order = order[np.isfinite(d[order])][:n]
+    starts = true_coarse.centre(order)
+    if len(starts) < n:
+        starts = np.vstack([starts, np.repeat(starts[:1], n - len(starts), axis=0)])
+    return true_coarse.centre(bnode)[0], starts.astype(float)
+
+
 class ExplorationSim:
     """State of an exploration run; strategies read and command it.
 
@@ -132,7 +142,7 @@ class ExplorationSim:
         BS position (cell coordinates); snapped to the nearest traversable
         coarse cell centre.
     strategy
-        The decision-making (:class:`Strategy`).
+        The decision-making (:class:`ExplorationPolicy`).
     config
         Physical parameters.
     """
@@ -141,7 +151,7 @@ class ExplorationSim:
         self,
         occupied: np.ndarray,
         base: np.ndarray,
-        strategy: Strategy,
+        strategy: ExplorationPolicy,
         config: ExplorationConfig | None = None,
     ) -> None:
         self.cfg = config or ExplorationConfig()
@@ -152,23 +162,12 @@ class ExplorationSim:
             self.cfg.fov_deg, self.cfg.sensor_range_cells, self.cfg.sensor_resolution_deg
         )
         self.link: LinkModel = LINK_MODELS.get(self.cfg.link_model)(**self.cfg.link_params)
-        true_coarse = CoarseGrid(~self.occupied, self.cfg.coarse_factor)
-        bnode = true_coarse.nearest_node(np.asarray(base, float))
-        if bnode < 0:
-            raise ValueError("the map has no traversable cell for the base station")
-        self.base = true_coarse.centre(bnode)[0]
-        self.free_region = _reachable_free(self.occupied, self.base)
-        self.free_total = int(self.free_region.sum())
         n = self.cfg.n_robots
         self.n = n
-        # start on the n traversable coarse cells closest (geodesically) to the BS
-        d = true_coarse.distances([bnode])[0]
-        order = np.argsort(d, kind="stable")
-        order = order[np.isfinite(d[order])][:n]
-        starts = true_coarse.centre(order)
-        if len(starts) < n:
-            starts = np.vstack([starts, np.repeat(starts[:1], n - len(starts), axis=0)])
-        self.pos = starts.astype(float)
+        self.base, starts = start_cells(self.occupied, base, n, self.cfg.coarse_factor)
+        self.free_region = _reachable_free(self.occupied, self.base)
+        self.free_total = int(self.free_region.sum())
+        self.pos = starts
         self.heading = np.zeros(n)
         self.paths: list[np.ndarray] = [self.pos[i : i + 1].copy() for i in range(n)]
         self.path_idx = np.zeros(n, dtype=int)
@@ -184,17 +183,11 @@ class ExplorationSim:
         self.groups: list[list[int]] = [list(range(n))]
         self.t = 0
         self.events: list[dict[str, Any]] = []
-        self.timing = {"move": 0.0, "sense": 0.0, "comm": 0.0, "strategy": 0.0, "metrics": 0.0}
+        self.timing = {"move": 0.0, "sense": 0.0, "comm": 0.0, "strategy": 0.0}
         # initial full scans at the start positions, shared with the BS
         for r, cells in enumerate(self.sensor.scan(self.occupied, self.pos, self.heading, True)):
             self.knowledge.observe(r, cells)
         self._communicate()
-        self._explored: list[float] = []
-        self._connected_hist: list[np.ndarray] = []
-        self._pos_hist: list[np.ndarray] = []
-        self._links_hist: list[int] = []
-        self._lambda2_hist: list[float] = []
-        self._record()
 
     # ------------------------------------------------------------------ commands
     def assign(
@@ -308,9 +301,7 @@ class ExplorationSim:
     def _communicate(self) -> None:
         nodes = np.vstack([self.base[None], self.pos])
         pairs = link_pairs(self.link, ~self.occupied, nodes)
-        m = len(nodes)
-        adj = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
-        _, lab = connected_components(adj, directed=False)
+        _, lab = components(len(nodes), pairs)
         self.connected = lab[1:] == lab[0]
         groups: dict[int, list[int]] = {}
         for r in range(self.n):
@@ -322,16 +313,13 @@ class ExplorationSim:
         # a robot's data is at the BS once it finished at its goal while connected
         self.delivered |= self.connected & self.at_goal & self.scanned
 
-    def _record(self) -> None:
+    def explored_fraction(self) -> float:
+        """Share of the reachable free area known at the BS."""
         known = self.knowledge.global_known
-        self._explored.append(np.count_nonzero(known & self.free_region) / self.free_total)
-        self._connected_hist.append(self.connected.copy())
-        self._pos_hist.append(self.pos.copy())
-        self._links_hist.append(len(self.links))
-        self._lambda2_hist.append(algebraic_connectivity(self.n + 1, self.links))
+        return np.count_nonzero(known & self.free_region) / self.free_total
 
     def step(self) -> None:
-        """Advance the simulation by one step."""
+        """Advance by one step: move, sense, communicate, then the policy decides."""
         self.t += 1
         tic = time.perf_counter()
         moved = self._move()
@@ -342,59 +330,9 @@ class ExplorationSim:
         t3 = time.perf_counter()
         self.strategy.update(self)
         t4 = time.perf_counter()
-        self._record()
-        t5 = time.perf_counter()
         for key, dt in zip(
-            ("move", "sense", "comm", "strategy", "metrics"),
-            (t1 - tic, t2 - t1, t3 - t2, t4 - t3, t5 - t4),
+            ("move", "sense", "comm", "strategy"),
+            (t1 - tic, t2 - t1, t3 - t2, t4 - t3),
             strict=True,
         ):
             self.timing[key] += dt
-
-    def result(self, wall_time_s: float) -> ExplorationResult:
-        conn = np.asarray(self._connected_hist)
-        return ExplorationResult(
-            explored=np.asarray(self._explored),
-            connected=conn,
-            positions=np.asarray(self._pos_hist),
-            events=list(self.events),
-            metrics=self.strategy.metrics(),
-            wall_time_s=wall_time_s,
-            timing_s=dict(self.timing),
-            n_links=np.asarray(self._links_hist),
-            lambda2=np.asarray(self._lambda2_hist),
-        )
-
-
-def run_exploration(
-    occupied: np.ndarray,
-    strategy: Strategy,
-    config: ExplorationConfig | None = None,
-    base: np.ndarray | None = None,
-    rng: np.random.Generator | None = None,
-) -> ExplorationResult:
-    """Run one exploration mission and return its time series.
-
-    Parameters
-    ----------
-    occupied
-        True map ``(nx, ny)`` boolean.
-    strategy
-        A :class:`Strategy` (e.g. ``RecurrentStrategy`` or ``UtilityStrategy``).
-    config
-        Physical parameters (paper defaults).
-    base
-        BS position; random (from ``rng``) on the largest free region if omitted.
-    rng
-        Random generator for the BS position.
-    """
-    cfg = config or ExplorationConfig()
-    occupied = np.asarray(occupied, dtype=bool)
-    if base is None:
-        base = random_base(occupied, cfg.coarse_factor, rng or np.random.default_rng(0))
-    tic = time.perf_counter()
-    sim = ExplorationSim(occupied, base, strategy, cfg)
-    strategy.start(sim)
-    for _ in range(cfg.steps):
-        sim.step()
-    return sim.result(time.perf_counter() - tic)

@@ -45,8 +45,8 @@ from math import comb
 
 import numpy as np
 
-from tether.recurrent._problem import Problem
-from tether.recurrent.steiner import _path_edges, dreyfus_wagner
+from tether.recurrent.planning.problem import Problem
+from tether.recurrent.planning.steiner import _path_edges, dreyfus_wagner
 
 CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
 FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles

@@ -158,6 +158,28 @@ def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np
     return rotated * np.maximum(dist + e_r, 0.0)[:, None]
 
 
+def _directed(pairs: np.ndarray, positions: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
+    """Both directions of ``pairs`` sorted by observer: directed pairs, CSR indptr, relatives."""
+    directed = np.concatenate([pairs, pairs[:, ::-1]]) if len(pairs) else pairs.reshape(0, 2)
+    order = np.lexsort((directed[:, 1], directed[:, 0]))
+    directed = directed[order]
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(directed[:, 0], minlength=n))])
+    rel = positions[directed[:, 1]] - positions[directed[:, 0]]
+    return directed, indptr.astype(np.intp), rel
+
+
+def observation_from_pairs(positions: np.ndarray, pairs: np.ndarray) -> Observation:
+    """An exact (noise-free) observation of a given graph on nodes at ``positions``.
+
+    For strategies whose links come from their own model (e.g. communication
+    links on a grid map with a base station as an extra node).
+    """
+    positions = np.asarray(positions, dtype=float)
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
+    directed, indptr, rel = _directed(pairs, positions, len(positions))
+    return Observation(pairs, indptr, directed[:, 1].astype(np.intp), rel.copy(), rel)
+
+
 def sense(
     positions: np.ndarray,
     sensor: SensorModel,
@@ -168,14 +190,10 @@ def sense(
     positions = np.asarray(positions, dtype=float)
     n = len(positions)
     pairs = sensed_pairs(positions, sensor, world)
-    directed = np.concatenate([pairs, pairs[:, ::-1]]) if len(pairs) else pairs.reshape(0, 2)
-    order = np.lexsort((directed[:, 1], directed[:, 0]))
-    directed = directed[order]
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(directed[:, 0], minlength=n))])
-    rel = positions[directed[:, 1]] - positions[directed[:, 0]]
+    directed, indptr, rel = _directed(pairs, positions, n)
     return Observation(
         pairs=pairs,
-        indptr=indptr.astype(np.intp),
+        indptr=indptr,
         target=directed[:, 1].astype(np.intp),
         measured=_noisy(rel, sensor, rng),
         true_relative=rel,

@@ -14,7 +14,7 @@ of all-pairs shortest paths,
 
 with ``O(3^k n + 2^k n^2)`` work for ``k`` terminals on ``n`` vertices (every
 step is a vectorised numpy min). The shared multi-subset variant used by the
-approximation algorithm lives in :mod:`tether.recurrent._apx`; both reuse the
+approximation algorithm lives in :mod:`tether.recurrent.planning.apx`; both reuse the
 reconstruction helper :func:`reconstruct_tree` below.
 """
 

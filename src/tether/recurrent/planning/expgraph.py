@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import networkx as nx
 import numpy as np
 
-from tether.recurrent.frontiers import FrontierCluster, frontier_clusters
-from tether.recurrent.geodesic import CoarseGrid
-from tether.recurrent.links import LinkModel
+from tether.paths.geodesic import CoarseGrid
+from tether.recurrent.planning.frontiers import FrontierCluster, frontier_clusters
+from tether.sensing.links import LinkModel
 
 __all__ = [
     "BASE",

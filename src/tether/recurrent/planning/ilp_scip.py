@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from pyscipopt import SCIP_PARAMSETTING, SCIP_RESULT, Conshdlr, Model, quicksum
 
-from tether.recurrent._ilp import DirectedCutModel
+from tether.recurrent.planning.ilp_model import DirectedCutModel
 
 SCIP_PARAMS: dict = {
     # strong branching is most of the time of the instances that branch; capping the

@@ -17,7 +17,7 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
-from tether.recurrent._ilp import DirectedCutModel
+from tether.recurrent.planning.ilp_model import DirectedCutModel
 
 LP_ROUNDS = 200
 HIGHS_OPTIONS: dict = {}

@@ -1,47 +1,20 @@
-"""Exact optimal configurations: the directed-cut ILP of Banfi et al., eqs. (2)-(4).
+"""The directed-cut model of eqs. (2)-(4): variables, rows, cut separation.
 
-Model on the transformed graph of Sec. IV-A (root ``b`` = index 0, arcs in
-both directions except into ``b``), solved by branch-and-cut:
-
-    max  sum_f U(f) y_f                                        (2)
-    sum_v y_v <= |R^t|                                         (3)
-    x(delta^-(S)) >= y_k   for all S not containing b, k in S  (4)
-
-with binary arc variables ``x`` and vertex variables ``y``. The paper's (4) is
-stated for frontiers; as in the B-RMWCS formulation it is taken from
-(Alvarez-Miranda, Ljubic, Mutzel 2013, the paper's [13]), we keep a ``y`` for
-every vertex and add valid equalities and inequalities that make the LP
-relaxation strong without changing the optimum:
-
-* in-degree: ``x(delta^-(v)) = y_v`` (the solution is an arborescence, so its
-  arc count equals its vertex count and (3) counts robots);
-* 2-cycles: ``x_ij + x_ji <= y_i`` for ``i, j != b``;
-* no useless leaves: ``y_v <= x(delta^+(v))`` for non-frontiers ``v`` (a
-  non-frontier leaf can be dropped without loss).
-
-Cuts (4) are separated by max-flow (``scipy.sparse.csgraph.maximum_flow``)
-from ``b`` to every vertex with positive ``y``, with nested cuts (saturate
-the cut found, search again) and back cuts (the minimum cut closest to the
-sink), as the paper does with Gurobi following [13].
-
-Before the solve, two more exact reductions shrink the graph: vertices whose
-neighbourhood is contained in the closed neighbourhood of another vertex are
-removed if they are not frontiers (any tree through them can use the
-dominating vertex instead, at the same or lower robot count), and the hop
-reductions of :mod:`._problem` are re-applied. The APX solution (Algorithm 1,
-``delta = 4``) is passed to the solver as the starting incumbent.
+Banfi et al., Sec. IV-A; shared by the SCIP and HiGHS drivers
+(:mod:`.ilp_scip`, :mod:`.ilp_highs`) and built by :func:`.ilp.solve_ilp`,
+whose module docstring describes the formulation and the reductions.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow, shortest_path
 
-from tether.recurrent._problem import UNREACHABLE, Problem
+from tether.recurrent.planning.apx import SharedSteiner
+from tether.recurrent.planning.problem import Problem
 
 EPS = 1e-6
 SCALE = 1_000_000  # max-flow capacities are x* scaled to integers
@@ -299,9 +272,6 @@ class DirectedCutModel:
         return res.flow_value / SCALE, ~src_side, sink_side
 
 
-# ---------------------------------------------------------------- drivers
-
-
 def frontier_conflicts(problem: Problem, keep: np.ndarray, max_size: int) -> list[np.ndarray]:
     """Minimal sets of 2..max_size frontiers whose Steiner tree with b exceeds the budget.
 
@@ -309,8 +279,6 @@ def frontier_conflicts(problem: Problem, keep: np.ndarray, max_size: int) -> lis
     a configuration. The Steiner costs come from the shared DP of APX.
     Returned as keep-indexed vertex arrays.
     """
-    from tether.recurrent._apx import SharedSteiner
-
     budget = problem.budget
     fr = problem.frontiers
     fr = fr[problem.dist[0, fr] <= budget]
@@ -331,66 +299,3 @@ def frontier_conflicts(problem: Problem, keep: np.ndarray, max_size: int) -> lis
             if all(v in pos for v in group):
                 out.append(np.array([pos[v] for v in group]))
     return out
-
-
-def _incumbent(problem: Problem, keep: np.ndarray) -> tuple[set[int], dict[int, int]] | None:
-    """APX (delta = 4) on the reduced graph, as a tree with parent pointers."""
-    from tether.recurrent._apx import solve_apx
-
-    adj = problem.adj[keep][:, keep]
-    dist_f, pred = shortest_path(adj, unweighted=True, directed=False, return_predecessors=True)
-    dist = np.where(np.isfinite(dist_f), dist_f, UNREACHABLE).astype(np.int32)
-    sub = Problem(
-        [problem.labels[i] for i in keep],
-        adj,
-        dist,
-        pred,
-        problem.utility[keep],
-        problem.budget,
-        problem.fixed,
-    )
-    verts = solve_apx(sub, 4).vertices
-    if len(verts) <= 1:
-        return None
-    idx = np.fromiter(sorted(verts), dtype=np.intp)
-    order, preds = breadth_first_order(adj[idx][:, idx], 0, directed=False)
-    if len(order) != len(idx):
-        return None
-    parent = {int(idx[v]): int(idx[p]) for v, p in enumerate(preds) if p >= 0}
-    return verts, parent
-
-
-def _decode(model: DirectedCutModel, values: np.ndarray) -> set[int]:
-    y = values[model.n_arcs :]
-    return {0} | {int(v) for v in np.flatnonzero(y > 0.5) + 1}
-
-
-def solve_ilp(
-    problem: Problem, backend: str = "scip", time_limit_s: float | None = None
-) -> IlpResult:
-    """Solve eqs. (2)-(4) to proven optimality (see the module docstring)."""
-    t0 = time.perf_counter()
-    if problem.budget == 0 or not np.any(problem.utility > 0):
-        return IlpResult({0}, 0.0, True, 0.0, {})
-    keep = reduce_dominated(problem)
-    model = DirectedCutModel(problem, keep)
-    if CONFLICT_SIZE >= 2:
-        model.conflicts = frontier_conflicts(problem, keep, CONFLICT_SIZE)
-    hint = _incumbent(problem, keep)
-    stats = {
-        "n_reduced": int(model.n),
-        "arcs": int(model.n_arcs),
-        "reduce_s": time.perf_counter() - t0,
-    }
-    if backend == "scip":
-        from tether.recurrent._ilp_scip import solve_scip as run
-    elif backend == "highs":
-        from tether.recurrent._ilp_highs import solve_highs as run
-    else:
-        raise ValueError(f"unknown ILP backend {backend!r}; expected 'scip' or 'highs'")
-    values, proven, bound, more = run(model, hint, time_limit_s)
-    stats.update(more)
-    local = _decode(model, values)
-    verts = {int(keep[v]) for v in local}
-    utility = float(problem.utility[list(verts)].sum())
-    return IlpResult(verts, utility, proven, max(bound, utility), stats)

@@ -1,0 +1,239 @@
+"""Result files written like a database commit, and the provenance recorded with them.
+
+Every file is written to a temporary name beside its target and renamed into
+place (:func:`atomic_write`), so nobody ever reads half a file. A run folder
+(:class:`RunFolder`) goes further: all its files are written into a hidden
+staging folder beside the target, ``summary.json`` last, and the staging
+folder is then renamed onto the target. A run killed at any moment leaves the
+previous complete folder or nothing at its path, never a mix of two runs, and
+a folder holding ``summary.json`` always holds everything else too.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+import platform
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import scipy
+import yaml
+
+from tether import __version__
+from tether.errors import OutputError
+
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+SUMMARY = "summary.json"
+SCENARIO = "scenario.yaml"
+
+
+def atomic_write(path: Path, write: Callable[[str], None]) -> None:
+    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it onto ``path``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are ordinary files
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy scalars/arrays as Python values and non-finite floats as null/"inf"."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, float) and not np.isfinite(value):
+        return None if np.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
+
+
+def write_json(path: Path, data: dict[str, Any]) -> Path:
+    def write(tmp: str) -> None:
+        with open(tmp, "w") as fh:
+            json.dump(jsonable(data), fh, indent=2)
+            fh.write("\n")
+
+    atomic_write(path, write)
+    return path
+
+
+def write_yaml(path: Path, data: dict[str, Any]) -> Path:
+    def write(tmp: str) -> None:
+        with open(tmp, "w") as fh:
+            yaml.safe_dump(jsonable(data), fh, sort_keys=False)
+
+    atomic_write(path, write)
+    return path
+
+
+def write_table(path: Path, columns: dict[str, Any]) -> Path:
+    """Columns (equal-length sequences) as a Parquet table."""
+    table = pa.table({k: pa.array(np.asarray(v)) for k, v in columns.items()})
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp))
+    return path
+
+
+def write_rows(path: Path, rows: list[dict[str, Any]]) -> Path:
+    """A list of dicts (possibly with differing keys) as a Parquet table."""
+    if rows:
+        keys = list(dict.fromkeys(k for r in rows for k in r))
+        cols = {k: [jsonable(r.get(k)) for r in rows] for k in keys}
+        table = pa.table({k: pa.array(v) for k, v in cols.items()})
+    else:
+        table = pa.table({"step": pa.array([], pa.int64()), "kind": pa.array([], pa.string())})
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp))
+    return path
+
+
+def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
+    """Write a matplotlib figure as PNG (atomically) and close it."""
+    try:
+        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
+    finally:
+        import matplotlib.pyplot as plt  # loaded already: the figure exists
+
+        plt.close(fig)  # long sweeps would otherwise keep every figure alive
+    return path
+
+
+def is_run_folder(path: Path) -> bool:
+    """A folder tether wrote for a run (finished or not)."""
+    return (path / SUMMARY).is_file() or (path / SCENARIO).is_file()
+
+
+class RunFolder:
+    """The files of one run, staged and committed as a whole (see the module docstring).
+
+    Parameters
+    ----------
+    path
+        The run folder. If it exists it must be empty or a tether run folder
+        (which the commit replaces); anything else is refused, so that
+        ``--out .`` can never delete a user's files.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        if self.path.exists():
+            if not self.path.is_dir():
+                raise OutputError(f"{self.path}: exists and is not a folder; choose another --out")
+            if any(self.path.iterdir()) and not is_run_folder(self.path):
+                raise OutputError(
+                    f"{self.path}: folder is not empty and not a tether run folder; choose a "
+                    "new or empty folder for --out (tether replaces only its own run folders)"
+                )
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.staging = Path(
+                tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.staging-")
+            )
+        except OSError as exc:
+            raise OutputError(
+                f"{self.path}: cannot create the run folder ({exc.strerror or exc}); "
+                "choose a writable --out"
+            ) from None
+        os.chmod(self.staging, 0o777 & ~_UMASK)
+        self.written: list[str] = []
+
+    def file(self, name: str) -> Path:
+        self.written.append(name)
+        return self.staging / name
+
+    def write_yaml(self, name: str, data: dict[str, Any]) -> Path:
+        return write_yaml(self.file(name), data)
+
+    def write_json(self, name: str, data: dict[str, Any]) -> Path:
+        return write_json(self.file(name), data)
+
+    def write_table(self, name: str, columns: dict[str, Any]) -> Path:
+        return write_table(self.file(name), columns)
+
+    def write_rows(self, name: str, rows: list[dict[str, Any]]) -> Path:
+        return write_rows(self.file(name), rows)
+
+    def save_figure(self, fig: Any, name: str, dpi: int = 120) -> Path:
+        return save_figure(fig, self.file(f"figures/{name}"), dpi)
+
+    def commit(self, summary: dict[str, Any]) -> Path:
+        """Write ``summary.json`` last and move the staged folder onto :attr:`path`."""
+        write_json(self.file(SUMMARY), summary)
+        old = None
+        if self.path.exists():
+            old = Path(tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.old-"))
+            os.replace(self.path, old / "run")
+        os.replace(self.staging, self.path)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+        return self.path
+
+    def abort(self) -> None:
+        """Drop everything staged (the target folder is left as it was)."""
+        shutil.rmtree(self.staging, ignore_errors=True)
+
+
+def git_hash() -> str | None:
+    """The git commit of the tether source tree, if it is a checkout."""
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"],
+            cwd=Path(__file__).parent,
+            capture_output=True,
+            text=True,
+            timeout=5,
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return out.stdout.strip() or None if out.returncode == 0 else None
+
+
+def provenance() -> dict[str, Any]:
+    """Package version, git hash and machine, recorded with every result."""
+    return {
+        "tether_version": __version__,
+        "git_hash": git_hash(),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "cpu_count": os.cpu_count(),
+    }
+
+
+def machine() -> dict[str, Any]:
+    """The machine a measurement ran on (recorded with benchmark and report results)."""
+    cpu = platform.processor()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next(
+                (line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")),
+                cpu,
+            )
+    except OSError:
+        pass
+    return {
+        "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+        "platform": platform.platform(),
+        "cpu": cpu,
+        "cpu_count": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+    }
