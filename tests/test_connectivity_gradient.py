@@ -16,7 +16,7 @@ from tether.continuous.potential import (
 )
 from tether.continuous.weights import compute_weights
 from tether.geometry import point_segment_distance
-from tether.world.clearance import ObstacleIndex, surface_points
+from tether.world.clearance import ObstacleIndex
 from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
@@ -195,7 +195,7 @@ def test_grid_lower_bound_is_a_true_lower_bound(dim: int, centred: bool) -> None
 def test_surface_points_give_the_same_clearance() -> None:
     rng = np.random.default_rng(5)
     world = box_world(3, rng, boxes=5)
-    surf = surface_points(world.grid)
+    surf = world.grid.surface_points(outside_is_free=True)
     assert len(surf) < len(world.obstacle_points)
     free = rng.uniform(0, 20, size=(500, 3))
     free[:, 2] = rng.uniform(0, 8, size=500)

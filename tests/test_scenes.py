@@ -12,7 +12,7 @@ from scipy import ndimage
 from tether.errors import MapError, ScenarioError
 from tether.registry import SCENES
 from tether.world.grid import OccupancyGrid
-from tether.world.scenes import free_positions, make_scene, surface_points
+from tether.world.scenes import free_positions, make_scene
 from tether.world.world import World
 
 SHARED_MAPS = Path(__file__).parents[1] / ".." / "shared" / "maps"
@@ -84,13 +84,13 @@ def test_surface_points_match_brute_force(seed: int) -> None:
     shape = tuple(rng.integers(3, 9, size=dim))
     occupied = rng.random(shape) < 0.5
     grid = OccupancyGrid(occupied, float(rng.uniform(0.1, 2)), rng.normal(size=dim))
-    points = surface_points(grid)
+    points = grid.surface_points()
     got = {tuple(int(c) for c in cell) for cell in grid.to_cell(points)}
     assert got == brute_surface_cells(occupied)
     assert len(points) == len(got)
     # thinning keeps one surface cell per block, covering every block that has one
     stride = 2
-    thin = surface_points(grid, spacing_m=stride * grid.resolution_m)
+    thin = grid.surface_points(spacing_m=stride * grid.resolution_m)
     thin_cells = grid.to_cell(thin)
     assert {tuple(c) for c in thin_cells} <= got
     assert {tuple(c // stride) for c in thin_cells} == {tuple(np.array(c) // stride) for c in got}

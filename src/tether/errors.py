@@ -18,6 +18,13 @@ class ScenarioError(TetherError):
 class MapError(TetherError):
     """A map file is missing, corrupt or inconsistent with its metadata."""
 
+    @classmethod
+    def at(cls, path: object, field_name: str | None, message: str) -> MapError:
+        """A one-line error ``"<file>: <field>: <message>"`` (whitespace collapsed)."""
+        message = " ".join(str(message).split())
+        where = f"{path}: {field_name}: " if field_name else f"{path}: "
+        return cls(where + message)
+
 
 class OutputError(TetherError):
     """An output folder cannot be written, or would mix two runs' files."""

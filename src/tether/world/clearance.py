@@ -19,25 +19,6 @@ from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
 
-def surface_points(grid: OccupancyGrid) -> np.ndarray:
-    """Centres of occupied cells with a free (or outside) face-neighbour.
-
-    For any point outside the obstacles, the nearest occupied cell centre is
-    such a surface cell (an interior cell always has a closer occupied
-    neighbour towards the point), so the surface replaces the full point set
-    in every clearance computation at a fraction of the size. A segment that
-    crosses an obstacle enters it through a surface cell, so its clearance is
-    below half a cell diagonal with either point set.
-    """
-    occ = grid.occupied
-    padded = np.pad(occ, 1, constant_values=False)
-    interior = occ.copy()
-    for axis in range(occ.ndim):
-        for shift in (-1, 1):
-            interior &= np.roll(padded, shift, axis=axis)[(slice(1, -1),) * occ.ndim]
-    return grid.to_world(np.argwhere(occ & ~interior)).reshape(-1, occ.ndim)
-
-
 def sample_segments(
     a: np.ndarray, b: np.ndarray, max_spacing_m: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -81,14 +62,15 @@ class ObstacleIndex:
         """Obstacles of a world, with the grid pre-screen when the points lie in occupied cells.
 
         A point set equal to all occupied cell centres is thinned to the
-        surface first (exact for clearance queries, see :func:`surface_points`).
+        surface first (exact for clearance queries, see
+        :meth:`~tether.world.grid.OccupancyGrid.surface_points`).
         """
         pts = np.asarray(world.obstacle_points, dtype=float).reshape(-1, world.dim)
         grid = world.grid
         if grid is None or not len(pts) or not bool(np.all(grid.is_occupied(pts))):
             return cls(pts, world.dim, None)
         if len(pts) == int(grid.occupied.sum()):
-            pts = surface_points(grid)
+            pts = grid.surface_points(outside_is_free=True)
         return cls(pts, world.dim, grid)
 
     @cached_property

@@ -129,6 +129,30 @@ class OccupancyGrid:
             return np.all(clear > 0.0, axis=1)
         return np.all(clear >= threshold, axis=1)
 
+    def surface_points(
+        self, spacing_m: float | None = None, *, outside_is_free: bool = False
+    ) -> np.ndarray:
+        """Centres of occupied cells with a free face-neighbour, ``(m, dim)`` in world coordinates.
+
+        ``outside_is_free`` counts cells beyond the grid as free (then the
+        grid's outer occupied layer is surface too). For any free point, the
+        nearest occupied cell centre is a surface cell (an interior cell always
+        has a closer occupied neighbour towards the point), so the surface
+        replaces all occupied centres in clearance queries. With ``spacing_m``
+        above the resolution, the surface is thinned to one cell per block of
+        ``round(spacing_m / resolution_m)`` cells along each axis (a voxel-grid
+        filter, about ``area / spacing_m**(dim-1)`` points). Every returned
+        point is a cell centre inside an occupied cell.
+        """
+        occupied = self.occupied
+        inner = ndimage.binary_erosion(occupied, border_value=0 if outside_is_free else 1)
+        cells = np.argwhere(occupied & ~inner)
+        stride = 1 if spacing_m is None else max(int(round(spacing_m / self.resolution_m)), 1)
+        if stride > 1 and len(cells):
+            _, keep = np.unique(cells // stride, axis=0, return_index=True)
+            cells = cells[np.sort(keep)]
+        return self.to_world(cells).reshape(-1, self.dim)
+
     def obstacle_points(self) -> np.ndarray:
         """Centres of occupied cells, ``(m, dim)`` in world coordinates."""
         return self.to_world(np.argwhere(self.occupied)).reshape(-1, self.dim)
