@@ -45,18 +45,18 @@ max-consensus provides in a deployment (we read it from the graph).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import scipy.sparse as sp
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.weights import WeightedGraph
 
 
-@dataclass(frozen=True)
-class EstimatorParams:
-    """Gains of the estimator (dimensionless, per round)."""
+class EstimatorParams(BaseModel):
+    """Gains of the estimator (dimensionless, per round); the defaults are the ones runs use."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
 
     k1: float = 4.0
     k2: float = 1.0
@@ -64,18 +64,24 @@ class EstimatorParams:
     gamma: float = 4.0
     kp: float = 2.0
     ki: float = 3.0
-    step_scale: float = 0.5
+    step_scale: float = Field(default=1.0, gt=0, le=1)
 
-    def __post_init__(self) -> None:
+    @model_validator(mode="after")
+    def _stable(self) -> EstimatorParams:
         if not (self.k1 > self.k3 > 0 and self.k2 > 0):
             raise ValueError("need k1 > k3 > 0 and k2 > 0 (Yang et al. 2010)")
-        if not (self.gamma > 0 and self.kp > 0 and self.ki > 0 and 0 < self.step_scale <= 1):
-            raise ValueError("need gamma, kp, ki > 0 and 0 < step_scale <= 1")
+        if not (self.gamma > 0 and self.kp > 0 and self.ki > 0):
+            raise ValueError("need gamma, kp, ki > 0")
+        return self
 
     @property
     def saturation(self) -> float:
         """The largest lambda2 the estimator can report (``k3 / k2``)."""
         return self.k3 / self.k2
+
+    def gains(self) -> EstimatorParams:
+        """Only the gains (drops the fields a subclass adds)."""
+        return EstimatorParams(**{k: getattr(self, k) for k in EstimatorParams.model_fields})
 
 
 class FiedlerEstimator:

@@ -70,18 +70,13 @@ class ExternalForce(_Strict):
     gain_n_per_m: float = Field(default=1.0, ge=0)
 
 
-class EstimatorConfig(_Strict):
-    """Decentralized estimator and message-layer faults (``eigensolver: estimator``)."""
+class EstimatorConfig(EstimatorParams):
+    """Decentralized estimator (its gains), rounds and message-layer faults."""
+
+    model_config = ConfigDict(extra="forbid", frozen=False)
 
     rounds_per_substep: int = Field(default=20, ge=1)
     warmup_rounds: int = Field(default=3000, ge=0)
-    k1: float = 4.0
-    k2: float = 1.0
-    k3: float = 2.0
-    gamma: float = 4.0
-    kp: float = 2.0
-    ki: float = 3.0
-    step_scale: float = Field(default=1.0, gt=0, le=1)
     loss_probability: float = Field(default=0.0, ge=0, lt=1)
     delay_rounds: int = Field(default=0, ge=0)
     failures: dict[int, int] = Field(default_factory=dict)
@@ -148,8 +143,7 @@ class ConnectivityStrategyParams(_Strict):
         )
 
     def estimator_params(self) -> EstimatorParams:
-        e = self.estimator
-        return EstimatorParams(e.k1, e.k2, e.k3, e.gamma, e.kp, e.ki, e.step_scale)
+        return self.estimator.gains()
 
 
 def external_force(

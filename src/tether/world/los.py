@@ -18,33 +18,39 @@ __all__ = ["segment_free"]
 def segment_free(
     free: np.ndarray, a: np.ndarray, b: np.ndarray, step_cells: float = 0.5, chunk: int = 4096
 ) -> np.ndarray:
-    """Boolean ``(k,)``: every sample of segment ``a[k] -> b[k]`` lies in ``free``.
+    """Boolean ``(k,)``: every sample of segment ``a[k] -> b[k]`` lies in a ``free`` cell.
 
-    Samples are ``step_cells`` apart from the lexicographically smaller end
-    (plus the far end), so the answer is symmetric and independent of the
-    batch. Points outside the grid count as blocked.
+    ``free`` is a 2-D or 3-D boolean mask; ``a`` and ``b`` are ``(k, dim)``
+    points in continuous cell coordinates. Samples are ``step_cells`` apart
+    from the lexicographically smaller end (plus the far end), so the answer
+    is symmetric and does not depend on the other segments of the batch.
+    Points outside the grid count as blocked. Cost ``O(k * length / step)``.
     """
     a = np.atleast_2d(np.asarray(a, dtype=float))
     b = np.atleast_2d(np.asarray(b, dtype=float))
     out = np.zeros(len(a), dtype=bool)
     if len(a) == 0:
         return out
-    # canonical direction and absolute sample spacing: the answer for a segment
-    # does not depend on its orientation or on the other segments of the batch
-    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
+    # canonical direction: the lexicographically smaller end first
+    diff = b - a
+    nonzero = diff != 0
+    first = np.argmax(nonzero, axis=1)
+    swap = nonzero.any(axis=1) & (diff[np.arange(len(a)), first] < 0)
     a, b = np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)
-    nx_, ny_ = free.shape
+    shape = np.asarray(free.shape)
     length = np.linalg.norm(b - a, axis=1)
     n_samples = int(np.ceil(length.max() / step_cells)) + 1
     k = np.arange(n_samples) * step_cells
     for lo in range(0, len(a), chunk):
         aa, bb, ll = a[lo : lo + chunk], b[lo : lo + chunk], length[lo : lo + chunk]
         frac = np.minimum(k[None, :] / np.maximum(ll, 1e-12)[:, None], 1.0)
-        px = aa[:, 0, None] + frac * (bb[:, 0] - aa[:, 0])[:, None]
-        py = aa[:, 1, None] + frac * (bb[:, 1] - aa[:, 1])[:, None]
-        ix = np.floor(px).astype(np.intp)
-        iy = np.floor(py).astype(np.intp)
-        inside = (ix >= 0) & (ix < nx_) & (iy >= 0) & (iy < ny_)
-        ok = free[np.clip(ix, 0, nx_ - 1), np.clip(iy, 0, ny_ - 1)] & inside
+        inside = np.ones(frac.shape, dtype=bool)
+        index = []
+        for d in range(free.ndim):
+            p = aa[:, d, None] + frac * (bb[:, d] - aa[:, d])[:, None]
+            i = np.floor(p).astype(np.intp)
+            inside &= (i >= 0) & (i < shape[d])
+            index.append(np.clip(i, 0, shape[d] - 1))
+        ok = free[tuple(index)] & inside
         out[lo : lo + chunk] = ok.all(axis=1)
     return out
