@@ -285,7 +285,9 @@ def _snap(
     if len(free_cells) == 0:
         return None
     dist = np.linalg.norm(plan.to_world(free_cells) - point, axis=1)
-    order = np.argsort(dist, kind="stable")[:16]
+    k = min(16, len(dist))
+    cand = np.flatnonzero(dist <= np.partition(dist, k - 1)[k - 1])  # O(V), not a full sort
+    order = cand[np.argsort(dist[cand], kind="stable")][:k]  # ties: lowest index first
     near = free_cells[order]
     clear = world_or_grid.segments_clear(
         np.repeat(point[None], len(near), axis=0), plan.to_world(near)
