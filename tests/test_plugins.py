@@ -118,3 +118,15 @@ def test_every_link_model_runs_the_exploration_demo(model, tmp_path):
     outcome = run(scenario_from_dict(data, "demo.yaml"), out_dir=tmp_path / model)
     summary = check_run_folder(outcome.path, data["team"]["n_robots"])
     assert 0 < summary["final_explored_fraction"] <= 1
+
+
+def test_cli_list_names_every_registered_plugin():
+    from typer.testing import CliRunner
+
+    from tether.cli import app
+
+    result = CliRunner().invoke(app, ["list"])
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    for name in (*STRATEGIES.names(), *SCENES.names(), *LINK_MODELS.names(), *builtin_scenarios()):
+        assert name in text

@@ -131,31 +131,24 @@ def sweep(
 @app.command()
 def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
     """Check a scenario (schema, strategy parameters, map, initial connectivity) without running."""
-    import numpy as np
-
-    from tether.runner import build, build_world, strategy_class, strategy_params
+    from tether.runner import build
 
     sc = _load(scenario, set_)
-    cls = strategy_class(sc)
-    if hasattr(cls, "run_scenario"):  # exploration strategies build their team themselves
-        strategy_params(sc, cls)
-        build_world(sc, np.random.default_rng(sc.seed))
-    else:
-        build(sc)
+    build(sc)  # exactly the checks `run` makes before it simulates
     out.print(f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)")
 
 
 @app.command("list")
 def list_() -> None:
     """List built-in scenarios, strategies and scenes."""
-    import tether.world.scenes  # noqa: F401
     from tether.config import builtin_scenarios
-    from tether.registry import SCENES
-    from tether.strategies import load_builtin_strategies
+    from tether.plugins import load_builtins
 
-    out.print("scenarios:  " + ", ".join(builtin_scenarios()))
-    out.print("strategies: " + ", ".join(load_builtin_strategies()))
-    out.print("scenes:     " + ", ".join(SCENES.names()))
+    names = load_builtins()
+    out.print("scenarios:   " + ", ".join(builtin_scenarios()))
+    out.print("strategies:  " + ", ".join(names["strategies"]))
+    out.print("scenes:      " + ", ".join(names["scenes"]))
+    out.print("link models: " + ", ".join(names["link models"]))
 
 
 def main() -> None:
