@@ -26,6 +26,7 @@ def safe_team(
     obstacles: ObstacleIndex | None = None,
     margin_m: float = 1.0,
     height_m: tuple[float, float] | None = None,
+    center_m: list[float] | np.ndarray | None = None,
     max_tries: int = 50,
 ) -> np.ndarray:
     """``(n, dim)`` positions with ``lambda2 > lambda2_min`` in ``G_lambda``.
@@ -36,6 +37,8 @@ def safe_team(
         Keep the first robot this far inside the world's bounds.
     height_m
         For 3-D worlds, the range of heights of the first robot.
+    center_m
+        Where the first robot is (default: uniform in the bounds less ``margin_m``).
     """
     obstacles = obstacles or ObstacleIndex.from_world(world)
     dim = world.dim
@@ -44,7 +47,9 @@ def safe_team(
     )
     for _ in range(max_tries):
         start = rng.uniform(lo + margin_m, hi - margin_m)
-        if dim == 3 and height_m is not None:
+        if center_m is not None:
+            start = np.asarray(center_m, dtype=float).copy()
+        elif dim == 3 and height_m is not None:
             start[2] = rng.uniform(*height_m)
         pts = [start]
         for _ in range(200 * n):
