@@ -89,6 +89,10 @@ class MultiTargetParams(ConnectivityStrategyParams):
     k_lambda_per_s: float = Field(default=5.0, gt=0)
     alpha_lambda: float = Field(default=0.5, ge=0, le=1)
     r_gamma_m: float | None = Field(default=None, gt=0, description="default: Rz")
+    inflate_m: float | None = Field(
+        default=None, gt=0, description="planning inflation; default (Ro + R'o) / 2"
+    )
+    stall_timeout_s: float | None = Field(default=60.0, gt=0)
     max_travel_force_n: float = Field(default=10.0, gt=0)
     election_criterion: Literal["path_length", "distance"] = "path_length"
     messages: MessagesConfig = Field(default_factory=MessagesConfig)
@@ -167,6 +171,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         try:
             q = safe_team(world, scenario.team.n_robots, params.connectivity(), rng,
                           margin_m=s.margin_m, center_m=s.center_m,
+                          box_margin_m=params.ro_m,
                           height_m=tuple(s.height_m) if s.height_m else None)  # fmt: skip
         except ValueError as exc:
             raise ScenarioError(f"{scenario.source}: strategy.params.start: {exc}") from None
@@ -213,8 +218,11 @@ class MultiTargetStrategy(ConnectivityStrategy):
         comm = CommParams(p.messages.loss_probability, p.messages.delay_rounds)
         self.election = Election(n, MessageLayer(n, comm, rng))
         self.consensus = EfficiencyConsensus(n, MessageLayer(n, comm, rng), p.k_lambda_per_s)
-        self.planner = RolePlanner(world, self.targets, r_grid_m=p.r_grid_m, rz_m=p.rz_m,
-                                   r_gamma_m=p.r_gamma_m or p.rz_m, emit=self.emit)  # fmt: skip
+        self.planner = RolePlanner(
+            world, self.targets, r_grid_m=p.r_grid_m, rz_m=p.rz_m,
+            inflate_m=p.inflate_m or 0.5 * (p.ro_m + p.ro_outer_m),
+            r_gamma_m=p.r_gamma_m or p.rz_m, stall_timeout_s=p.stall_timeout_s, emit=self.emit,
+        )  # fmt: skip
         self.planner.start_up(state.positions)
         self.filter: ReferenceFilter | None = None  # made at the first step (it needs dt)
         self._t_s = 0.0

@@ -43,8 +43,11 @@ class RolePlanner:
         The scene (paths are planned on its grid).
     book
         The target queues.
-    r_grid_m, rz_m, r_gamma_m
-        Planning cell, anchoring radius, replanning distance.
+    r_grid_m, inflate_m, rz_m, r_gamma_m
+        Planning cell and inflation, anchoring radius, replanning distance.
+    stall_timeout_s
+        A prime traveler whose remaining path has not shrunk by ``r_grid_m`` for
+        this long drops its target (``None``: never).
     emit
         ``emit(kind, robot, **data)`` records an event.
     """
@@ -55,8 +58,10 @@ class RolePlanner:
         book: TargetBook,
         *,
         r_grid_m: float,
+        inflate_m: float,
         rz_m: float,
         r_gamma_m: float,
+        stall_timeout_s: float | None,
         emit: Emit,
     ) -> None:
         n = len(book.queues)
@@ -65,6 +70,8 @@ class RolePlanner:
         self.r_grid_m = r_grid_m
         self.rz_m = rz_m
         self.r_gamma_m = r_gamma_m
+        self.inflate_m = inflate_m
+        self.stall_timeout_s = stall_timeout_s
         self.emit = emit
         self.role = np.full(n, CONNECTOR)
         self.target: list[Target | None] = [None] * n
@@ -76,7 +83,11 @@ class RolePlanner:
         self.reached = 0
         self.dropped = 0
         self.replans = 0
-        self._planning = planning_grid(world, cell_m=r_grid_m) if world.grid is not None else None
+        self.progress = np.full(n, np.inf)  # the prime's best remaining length so far
+        self.progress_at = np.full(n, np.nan)  # ... and when it last shrank by r_grid_m
+        self._planning = None
+        if world.grid is not None:
+            self._planning = planning_grid(world, cell_m=r_grid_m, inflate_m=inflate_m)
 
     # -- paths -----------------------------------------------------------------------
     @property
@@ -97,6 +108,8 @@ class RolePlanner:
 
     # -- helpers ---------------------------------------------------------------------
     def set_role(self, robot: int, role: int, t_s: float) -> None:
+        if role == PRIME:  # a new prime starts its progress watch
+            self.progress[robot], self.progress_at[robot] = np.inf, np.nan
         if self.role[robot] != role:
             self.emit("role", robot, t_s=t_s, old=ROLE_NAMES[self.role[robot]],
                       new=ROLE_NAMES[role])  # fmt: skip
@@ -105,7 +118,8 @@ class RolePlanner:
     def plan(self, robot: int, q: np.ndarray) -> TrackedPath | None:
         """A* (cell ``Rgrid``) and B-spline from ``q`` to the robot's target; ``None`` if none."""
         goal = self.target[robot].position_m
-        waypoints = plan_path(self.world, q, goal, cell_m=self.r_grid_m, planning=self._planning)
+        waypoints = plan_path(self.world, q, goal, cell_m=self.r_grid_m,
+                              inflate_m=self.inflate_m, planning=self._planning)  # fmt: skip
         if waypoints is None:
             return None
         return TrackedPath.from_spline(smooth_path(waypoints, self.world, planning=self._planning))
@@ -160,7 +174,8 @@ class RolePlanner:
     def update(self, q: np.ndarray, t_s: float) -> np.ndarray:
         """Algorithm 1 for every robot; returns who wants a prime election (line 14)."""
         dist = self.distance_to_target(q)
-        off_path, _ = self.on_path(q)
+        off_path, remaining = self.on_path(q)
+        self._watch(remaining, t_s)
         wants = np.zeros(len(q), dtype=bool)
         for i in range(len(q)):
             role, z = self.role[i], self.target[i]
@@ -190,6 +205,17 @@ class RolePlanner:
                 self.inside_since[i] = np.nan
                 self.set_role(i, CONNECTOR, t_s)
         return wants
+
+    def _watch(self, remaining: np.ndarray, t_s: float) -> None:
+        """The prime's progress watchdog: drop a target it cannot get closer to."""
+        for i in np.flatnonzero(self.role == PRIME):
+            if not np.isfinite(remaining[i]):
+                continue
+            if remaining[i] < self.progress[i] - self.r_grid_m or np.isnan(self.progress_at[i]):
+                self.progress[i], self.progress_at[i] = remaining[i], t_s
+            elif self.stall_timeout_s is not None and \
+                    t_s - self.progress_at[i] > self.stall_timeout_s:  # fmt: skip
+                self.drop(i, t_s, "stalled")
 
     def _secondary(self, i: int, q: np.ndarray, dist: float, off_path: float, t_s: float) -> None:
         if self._paths[i] is not None and off_path > self.r_gamma_m:
