@@ -114,11 +114,25 @@ class _Painter:
             ax.plot(p[:, 0], p[:, 1], ls="--", color=style.PATH, lw=1.4, zorder=2)
         if run.targets_m is not None:
             g = run.targets_m
-            ax.scatter(g[:, 0], g[:, 1], marker="*", s=160, c=style.TARGET,
-                       edgecolors=style.ROBOT_EDGE, zorder=5)  # fmt: skip
+            ax.scatter(
+                g[:, 0],
+                g[:, 1],
+                marker="*",
+                s=160,
+                c=style.TARGET,
+                edgecolors=style.ROBOT_EDGE,
+                zorder=5,
+            )
         if run.base_m is not None:
-            ax.scatter([run.base_m[0]], [run.base_m[1]], marker="s", s=90, c=style.BASE_STATION,
-                       edgecolors=style.ROBOT_EDGE, zorder=5)  # fmt: skip
+            ax.scatter(
+                [run.base_m[0]],
+                [run.base_m[1]],
+                marker="s",
+                s=90,
+                c=style.BASE_STATION,
+                edgecolors=style.ROBOT_EDGE,
+                zorder=5,
+            )
         self.trails = LineCollection([], linewidths=0.8, colors="#555555", alpha=0.35, zorder=2)
         ax.add_collection(self.trails)
         self.links = LineCollection([], linewidths=1.3, zorder=3)
@@ -138,8 +152,9 @@ class _Painter:
             self.side.set_ylim(zlo, ztop + 0.5)
             self.side_links = LineCollection([], linewidths=1.0, zorder=3)
             self.side.add_collection(self.side_links)
-            self.side_dots = self.side.scatter([], [], s=24, edgecolors=style.ROBOT_EDGE,
-                                               linewidths=0.5, zorder=4)  # fmt: skip
+            self.side_dots = self.side.scatter(
+                [], [], s=24, edgecolors=style.ROBOT_EDGE, linewidths=0.5, zorder=4
+            )
             self.side.set_title("side view", fontsize=8, loc="left")
         self.cursor = None
         if strip is not None and self.strip_ax is not None:
@@ -163,8 +178,14 @@ class _Painter:
         )
         legend_ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
         if self.first_seen is not None and not exact:
-            legend_ax.text(0, 0.02, "known map: seen by the\nrobots (approx.)", fontsize=7,
-                           transform=legend_ax.transAxes, color="#555555")  # fmt: skip
+            legend_ax.text(
+                0,
+                0.02,
+                "known map: seen by the\nrobots (approx.)",
+                fontsize=7,
+                transform=legend_ax.transAxes,
+                color="#555555",
+            )
         self.fig.tight_layout()
         if self.side is not None:  # the side view under the top view, same x scale
             self.ax.apply_aspect()
@@ -187,8 +208,9 @@ class _Painter:
         run = self.run
         roles = run.roles[k] if run.roles is not None else None
         conn = run.connected[k] if run.connected is not None else None
-        return style.robot_colours(run.n_robots, roles=roles, role_map=self.role_map,
-                                   leader=run.leader, connected=conn)  # fmt: skip
+        return style.robot_colours(
+            run.n_robots, roles=roles, role_map=self.role_map, leader=run.leader, connected=conn
+        )
 
     def draw(self, k: int, shown: np.ndarray) -> np.ndarray:
         run = self.run
@@ -205,9 +227,15 @@ class _Painter:
         self.dots.set_facecolors(colours[order])
         if run.dim == 3:  # higher robots drawn larger and on top
             z = pos[order, 2]
-            span = max(float(np.nanmax(run.positions_m[:, :, 2]) - np.nanmin(run.positions_m[:, :, 2])), 1e-9)
+            span = max(
+                float(np.nanmax(run.positions_m[:, :, 2]) - np.nanmin(run.positions_m[:, :, 2])),
+                1e-9,
+            )
             self.dots.set_sizes(26 + 30 * (z - np.nanmin(run.positions_m[:, :, 2])) / span)
-        past = shown[max(0, int(np.searchsorted(shown, k)) - TRAIL_FRAMES) : int(np.searchsorted(shown, k)) + 1]
+        past = shown[
+            max(0, int(np.searchsorted(shown, k)) - TRAIL_FRAMES) : int(np.searchsorted(shown, k))
+            + 1
+        ]
         trail = run.positions_m[past][:, :, :2].transpose(1, 0, 2)
         self.trails.set_segments(list(trail) if len(past) > 1 else [])
         if self.first_seen is not None and self.map_img is not None:
@@ -216,7 +244,9 @@ class _Painter:
             xz = nodes[:, [0, 2]]
             self.side_dots.set_offsets(pos[:, [0, 2]])
             self.side_dots.set_facecolors(colours)
-            self.side_links.set_segments(np.stack([xz[lk[:, 0]], xz[lk[:, 1]]], axis=1) if len(lk) else [])
+            self.side_links.set_segments(
+                np.stack([xz[lk[:, 0]], xz[lk[:, 1]]], axis=1) if len(lk) else []
+            )
             self.side_links.set_colors(link_rgba)
         t = float(run.frame_times_s[k])
         self.title.set_text(f"{run.name}: t = {t:.1f} s (step {int(run.frame_steps[k])})")
@@ -252,11 +282,20 @@ def _write_gif(frames: Iterator[np.ndarray], out: Path, fps: float) -> tuple[int
     images = []
     for rgb in frames:
         im = Image.fromarray(rgb)
-        images.append(im.quantize(colors=128, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE))
+        images.append(
+            im.quantize(colors=128, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE)
+        )
     if not images:
         raise TetherError("nothing to animate: the run has no recorded positions")
-    images[0].save(out, save_all=True, append_images=images[1:], duration=int(round(1000 / fps)),
-                   loop=0, optimize=False, disposal=1)  # fmt: skip
+    images[0].save(
+        out,
+        save_all=True,
+        append_images=images[1:],
+        duration=int(round(1000 / fps)),
+        loop=0,
+        optimize=False,
+        disposal=1,
+    )
     return len(images), images[0].size
 
 
@@ -270,10 +309,31 @@ def _write_mp4(frames: Iterator[np.ndarray], out: Path, fps: float) -> tuple[int
         for rgb in frames:
             if proc is None:
                 size = (rgb.shape[1], rgb.shape[0])
-                cmd = [ffmpeg, "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
-                       "-s", f"{size[0]}x{size[1]}", "-r", f"{fps:g}", "-i", "-",
-                       "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p",
-                       "-c:v", "libx264", "-movflags", "+faststart", str(out)]  # fmt: skip
+                cmd = [
+                    ffmpeg,
+                    "-y",
+                    "-loglevel",
+                    "error",
+                    "-f",
+                    "rawvideo",
+                    "-pix_fmt",
+                    "rgb24",
+                    "-s",
+                    f"{size[0]}x{size[1]}",
+                    "-r",
+                    f"{fps:g}",
+                    "-i",
+                    "-",
+                    "-vf",
+                    "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                    "-pix_fmt",
+                    "yuv420p",
+                    "-c:v",
+                    "libx264",
+                    "-movflags",
+                    "+faststart",
+                    str(out),
+                ]
                 proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
             assert proc.stdin is not None
             proc.stdin.write(rgb.tobytes())
@@ -329,4 +389,6 @@ def animate(
         count, size = writer(frames, out_path, fps)
     finally:
         painter.close()
-    return Animation(out_path, fmt, count, size, out_path.stat().st_size, time.perf_counter() - start)
+    return Animation(
+        out_path, fmt, count, size, out_path.stat().st_size, time.perf_counter() - start
+    )

@@ -29,7 +29,9 @@ if TYPE_CHECKING:
 NEVER = np.iinfo(np.int32).max
 
 
-def first_seen_from_maps(frame_steps: np.ndarray, steps: np.ndarray, known: np.ndarray) -> np.ndarray:
+def first_seen_from_maps(
+    frame_steps: np.ndarray, steps: np.ndarray, known: np.ndarray
+) -> np.ndarray:
     """First frame index at which each cell is known, from maps recorded at ``steps``."""
     known = np.asarray(known, dtype=bool)
     first_step_idx = np.where(known.any(axis=0), np.argmax(known, axis=0), -1)
@@ -40,9 +42,7 @@ def first_seen_from_maps(frame_steps: np.ndarray, steps: np.ndarray, known: np.n
     return out
 
 
-def first_seen_by_sight(
-    grid: OccupancyGrid, positions_m: np.ndarray, range_m: float
-) -> np.ndarray:
+def first_seen_by_sight(grid: OccupancyGrid, positions_m: np.ndarray, range_m: float) -> np.ndarray:
     """Approximate first frame each cell of a 2-D ``grid`` is seen by a robot.
 
     ``positions_m`` is ``(T, n, 2)``. A cell is seen when a ray from a robot

@@ -52,8 +52,15 @@ class _Arrays:
             chunks.append(b"\0" * pad)
             offset += pad
             raw = arr.tobytes()
-            layout.append({"name": name, "dtype": arr.dtype.name, "offset": offset,
-                           "length": int(arr.size), "shape": list(arr.shape)})  # fmt: skip
+            layout.append(
+                {
+                    "name": name,
+                    "dtype": arr.dtype.name,
+                    "offset": offset,
+                    "length": int(arr.size),
+                    "shape": list(arr.shape),
+                }
+            )
             chunks.append(raw)
             offset += len(raw)
         return layout, b"".join(chunks)

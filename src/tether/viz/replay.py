@@ -60,7 +60,9 @@ def three_script() -> str:
         local, _, exported = item.strip().partition(" as ")
         names.append(f"{(exported or local).strip()}:{local.strip()}")
     body = src[: match.start()]
-    return 'var THREE=(function(){"use strict";\n' + body + "\nreturn{" + ",".join(names) + "};})();"
+    return (
+        'var THREE=(function(){"use strict";\n' + body + "\nreturn{" + ",".join(names) + "};})();"
+    )
 
 
 def _script_safe(text: str) -> str:
@@ -113,8 +115,9 @@ def write_replay(
     out_path.parent.mkdir(parents=True, exist_ok=True)
     out_path.write_text(text, encoding="utf-8")
     size = out_path.stat().st_size
-    return Replay(out_path, size, payload.n_frames_shown, payload.stride,
-                  time.perf_counter() - start)  # fmt: skip
+    return Replay(
+        out_path, size, payload.n_frames_shown, payload.stride, time.perf_counter() - start
+    )
 
 
 class _OneFileHandler(http.server.BaseHTTPRequestHandler):
