@@ -157,6 +157,14 @@ async function main() {
     const box = document.getElementById(id);
     box.addEventListener("change", () => { if (scene) scene.setVisible(group, box.checked); });
   }
+  const followBox = document.getElementById("follow");
+  followBox.addEventListener("change", () => { if (scene) scene.setFollow(followBox.checked); });
+  if (scene && F > 1) {
+    // a team that stays small while it travels far: follow it from the start
+    const lo = m.focus_m[0], hi = m.focus_m[1];
+    const span = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    if (scene.spread(0) < 0.15 * span) { followBox.checked = true; scene.setFollow(true); }
+  }
   const playBtn = document.getElementById("play"), speedSel = document.getElementById("speed");
   const baseRate = Math.min(30, Math.max(2, F / 20)); // frames per second at 1x: about 20 s
   let playing = false, last = 0, carry = 0;

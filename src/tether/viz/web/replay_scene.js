@@ -91,7 +91,8 @@ class ReplayScene {
     if (m.dim === 2) centre.z = 0;
     const fsize = fhi.clone().sub(flo);
     const focus = Math.min(this.size, Math.max(fsize.x, fsize.y, fsize.z, 2 * m.range_m));
-    this.rad = Math.max(this.size * 0.009, 0.05);
+    // robots sized by the link range (the team's scale), not by the world
+    this.rad = Math.max(Math.min(0.06 * m.range_m, 0.009 * this.size), 0.02);
     this.camera = new THREE.PerspectiveCamera(45, 1, this.size / 2000, this.size * 50);
     this.linkStops = pal.link_stops.map(hexColour);
     this.groups = { links: [], paths: [], obstacles: [] };
@@ -290,8 +291,39 @@ class ReplayScene {
     g.setDrawRange(0, (hi - lo) * 2);
     this.trails.geometry.setDrawRange(0, f * n * 2);
     if (A.map_first_seen) this.paintMap(f);
+    if (this.follow) this.orbit.target.copy(this.centroid(f)), this.orbit.update();
     this.frame = f;
     this.dirty = true;
+  }
+
+  centroid(f) {
+    const n = this.run.meta.n_robots, c = new THREE.Vector3(), v = new THREE.Vector3();
+    let k = 0;
+    for (let r = 0; r < n; r++) {
+      if (!this.run.valid[f * n + r]) continue;
+      c.add(this.nodePosition(f, r, v)); k++;
+    }
+    return k ? c.multiplyScalar(1 / k) : this.orbit.target.clone();
+  }
+
+  spread(f) {
+    // largest distance of a robot from the team's centroid at frame f (m)
+    const n = this.run.meta.n_robots, c = this.centroid(f), v = new THREE.Vector3();
+    let most = 0;
+    for (let r = 0; r < n; r++) if (this.run.valid[f * n + r]) most = Math.max(most, this.nodePosition(f, r, v).distanceTo(c));
+    return most;
+  }
+
+  setFollow(on) {
+    this.follow = on;
+    if (on) {
+      this.orbit.radius = Math.min(this.orbit.radius, Math.max(4 * this.spread(this.frame || 0), 3 * this.run.meta.range_m));
+      this.orbit.target.copy(this.centroid(this.frame || 0));
+    } else {
+      this.orbit.target.copy(this.orbit.home.target);
+      this.orbit.radius = this.orbit.home.radius;
+    }
+    this.orbit.update();
   }
 
   setVisible(group, on) {
