@@ -202,6 +202,12 @@ async function main() {
     markerPositions: () => (scene ? scene.markerPositions() : []),
     drawnLinks: () => (scene ? scene.links.geometry.drawRange.count / 2 : 0),
     playing: () => playing,
+    visibility: () => {
+      const out = {};
+      if (scene) for (const [k, v] of Object.entries(scene.groups)) out[k] = v.length ? v[0].visible : null;
+      return out;
+    },
+    unknownCells: () => (scene && scene.mapPixels ? scene.unknownCells : null),
   });
   show(0);
   window.tether.ready = true;

@@ -154,13 +154,15 @@ class ReplayScene {
     // occupancy + (optionally) knowledge at `frame` into the ground texture
     const first = this.run.arrays.map_first_seen, px = this.mapPixels, cols = this.mapColours;
     occ = occ || this.run.arrays.map_occupied;
+    let unknown = 0;
     for (let i = 0; i < occ.length; i++) {
       let s = occ[i];
-      if (first && !(first[i] <= frame)) s += 2;
+      if (first && !(first[i] <= frame)) { s += 2; unknown++; }
       const c = cols[s];
       px[4 * i] = c[0]; px[4 * i + 1] = c[1]; px[4 * i + 2] = c[2]; px[4 * i + 3] = 255;
     }
     this.mapTexture.needsUpdate = true;
+    this.unknownCells = unknown;
   }
 
   buildObstacles() {
