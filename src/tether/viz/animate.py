@@ -163,7 +163,7 @@ class _Painter:
             self.strip_ax.set_xlabel("time (s)")
             self.strip_ax.set_ylabel(label)
             self.strip_ax.grid(alpha=0.3)
-            self.cursor = self.strip_ax.axvline(0.0, color=style.LEADER, lw=1.2)
+            self.cursor = self.strip_ax.axvline(0.0, color=style.CURSOR, lw=1.2)
         roles = run.roles
         self.role_map = style.role_colour_map(np.unique(roles)) if roles is not None else None
         handles = style.legend_handles(

@@ -5,7 +5,7 @@ figures), by the browser replay (:func:`palette` is embedded in the page) and by
 the ROS 2 export (marker colours), so a leader, a base station or a link about
 to break looks the same everywhere:
 
-* robots: one colour per ``role`` when the run records roles, the leader red,
+* robots: one colour per ``role`` when the run records roles, the leader magenta,
   exploration robots blue when connected to the base station and orange when not;
 * the base station: a purple square;
 * links: green (well connected, margin 1) through amber to red (about to break,
@@ -31,10 +31,11 @@ if TYPE_CHECKING:
     from tether.world.grid import OccupancyGrid
 
 ROBOT = "#1f77b4"
-LEADER = "#d62728"
-BASE_STATION = "#6a3d9a"
+LEADER = "#e7298a"  # magenta: red is taken by links about to break
+BASE_STATION = "#542788"
 TARGET = "#ff7f0e"
-PATH = "#e377c2"
+PATH = "#8c6bb1"
+CURSOR = "#222222"
 CONNECTED = "#1f77b4"
 DISCONNECTED = "#ff7f0e"
 ROBOT_EDGE = "#1a1a1a"
@@ -50,16 +51,16 @@ LINK_MID = "#ffbf00"
 LINK_GOOD = "#2ca02c"
 
 #: Roles get these colours in order of first appearance (sorted by name for stability);
-#: a role called ``leader`` is always :data:`LEADER`.
+#: a role called ``leader`` is always :data:`LEADER`. None is red, green or amber (links).
 ROLE_CYCLE = (
     "#1f77b4",
     "#9467bd",
     "#17becf",
     "#8c564b",
-    "#bcbd22",
     "#7f7f7f",
-    "#e377c2",
-    "#2ca02c",
+    "#08306b",
+    "#c2a5cf",
+    "#a6761d",
 )
 
 #: Link colour by margin in [0, 1]: red (about to break) -> amber -> green (well connected).
@@ -85,7 +86,7 @@ def link_colours(margin: np.ndarray) -> np.ndarray:
 
 
 def role_colour_map(roles: Sequence[str]) -> dict[str, str]:
-    """A fixed colour for each role name (``leader`` red, the others from :data:`ROLE_CYCLE`)."""
+    """A fixed colour for each role name (``leader`` magenta, others from :data:`ROLE_CYCLE`)."""
     out: dict[str, str] = {}
     k = 0
     for role in sorted(set(roles)):
@@ -108,7 +109,7 @@ def robot_colours(
     """RGBA ``(n, 4)`` of the robots at one instant.
 
     Priority: ``roles`` (with ``role_map``), else ``connected`` (exploration: to the
-    base station or not), else all :data:`ROBOT`; the ``leader`` is red on top.
+    base station or not), else all :data:`ROBOT`; the ``leader`` is magenta on top.
     """
     cols = np.tile(to_rgba(ROBOT), (n_robots, 1))
     if roles is not None:
@@ -302,6 +303,7 @@ def palette() -> dict[str, Any]:
         "base_station": BASE_STATION,
         "target": TARGET,
         "path": PATH,
+        "cursor": CURSOR,
         "connected": CONNECTED,
         "disconnected": DISCONNECTED,
         "free": FREE,

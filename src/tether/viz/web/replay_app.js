@@ -31,7 +31,7 @@ async function decodeRun() {
   return { meta, arrays, positions, valid };
 }
 
-function drawPlot(canvas, t, y, label, cursorT) {
+function drawPlot(canvas, t, y, label, cursorT, cursorColour) {
   const dpr = window.devicePixelRatio || 1, w = canvas.clientWidth, h = canvas.clientHeight;
   if (canvas.width !== Math.round(w * dpr)) { canvas.width = Math.round(w * dpr); canvas.height = Math.round(h * dpr); }
   const g = canvas.getContext("2d");
@@ -56,7 +56,7 @@ function drawPlot(canvas, t, y, label, cursorT) {
     pen = true;
   }
   g.stroke();
-  g.strokeStyle = "#d62728"; g.lineWidth = 1.5; g.beginPath();
+  g.strokeStyle = cursorColour; g.lineWidth = 1.5; g.beginPath();
   g.moveTo(X(cursorT), T); g.lineTo(X(cursorT), h - B); g.stroke();
   return { x0: L, x1: w - R, t0, t1 };
 }
@@ -132,7 +132,7 @@ async function main() {
     const nl = A.link_off[frame + 1] - A.link_off[frame];
     timeEl.textContent = "t = " + t.toFixed(1) + " s · step " + A.frame_steps[frame] + " · " + nl + " links";
     if (scene) scene.setFrame(frame);
-    for (const p of plots) p.geom = drawPlot(p.canvas, A.series_t, p.y, p.label, t);
+    for (const p of plots) p.geom = drawPlot(p.canvas, A.series_t, p.y, p.label, t, m.palette.cursor);
     window.tether.frame = frame;
   }
 
