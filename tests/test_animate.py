@@ -71,10 +71,23 @@ def test_stride_and_mp4(silent, tmp_path):
     assert head[4:8] == b"ftyp"
     if shutil.which("ffprobe"):
         probe = subprocess.run(
-            ["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0",
-             "-show_entries", "stream=nb_read_frames", "-of", "csv=p=0", str(m.path)],
-            capture_output=True, text=True, timeout=60,
-        )  # fmt: skip
+            [
+                "ffprobe",
+                "-v",
+                "error",
+                "-count_frames",
+                "-select_streams",
+                "v:0",
+                "-show_entries",
+                "stream=nb_read_frames",
+                "-of",
+                "csv=p=0",
+                str(m.path),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert int(probe.stdout.strip()) == 11
 
 
@@ -108,11 +121,25 @@ def test_exploration_map_fills_in(tmp_path):
 
 def test_cli_animate_and_run_shortcuts(tmp_path):
     def tether(*args: str) -> subprocess.CompletedProcess:
-        return subprocess.run([sys.executable, "-m", "tether.cli", *args], cwd=tmp_path,
-                              capture_output=True, text=True, timeout=600)  # fmt: skip
+        return subprocess.run(
+            [sys.executable, "-m", "tether.cli", *args],
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
 
-    proc = tether("run", "silent_demo", "--set", "sim.max_steps=15", "--out", "r", "--no-figures",
-                  "--animate", "--view")  # fmt: skip
+    proc = tether(
+        "run",
+        "silent_demo",
+        "--set",
+        "sim.max_steps=15",
+        "--out",
+        "r",
+        "--no-figures",
+        "--animate",
+        "--view",
+    )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "r" / "animation.gif").stat().st_size > 10_000
     assert (tmp_path / "r" / "replay.html").stat().st_size > 100_000

@@ -137,17 +137,30 @@ def test_rosbag2_exploration_run_poses_map_and_base_station(tmp_path):
 
 def test_cli_export_and_bad_format(town, tmp_path):
     proc = subprocess.run(
-        [sys.executable, "-m", "tether.cli", "export", str(town), "--format", "rosbag2",
-         "--out", str(tmp_path / "b")],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "tether.cli",
+            "export",
+            str(town),
+            "--format",
+            "rosbag2",
+            "--out",
+            str(tmp_path / "b"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     assert "rosbag2" in proc.stdout and (tmp_path / "b" / "metadata.yaml").exists()
     assert len(_read_rosbag2(tmp_path / "b")["/tether/robots"]) == 26
     proc = subprocess.run(
         [sys.executable, "-m", "tether.cli", "export", str(town), "--format", "bag"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 2 and "expected one of mcap, rosbag2" in proc.stderr
     with pytest.raises(TetherError, match="already exists"):
         export(town, tmp_path / "b", fmt="rosbag2")

@@ -101,14 +101,15 @@ class RunData:
         return np.vstack([pos, self.base_m[None, : self.dim]])
 
     def link_margins(self, k: int) -> np.ndarray:
-        """Per link of frame ``k``: recorded ``weight`` if present, else ``1 - d / range``."""
+        """Per link of frame ``k`` in [0, 1]: the recorded ``weight`` if present (divided by
+        the largest weight when weights exceed 1), else ``1 - d / range``."""
         from tether.viz.style import link_margin
 
         lo, hi = self.link_offsets[k], self.link_offsets[k + 1]
-        if self.link_weights is not None:
+        if self.link_weights is not None:  # weights in [0, 1] as they are, else over the max
             w = self.link_weights[lo:hi]
             top = float(np.nanmax(self.link_weights)) if len(self.link_weights) else 1.0
-            return np.clip(w / (top if top > 0 else 1.0), 0.0, 1.0)
+            return np.clip(w / (top if top > 1.0 else 1.0), 0.0, 1.0)
         lk = self.link_pairs[lo:hi]
         nodes = self.nodes(k)
         d = np.linalg.norm(nodes[lk[:, 0]] - nodes[lk[:, 1]], axis=1)
