@@ -164,3 +164,36 @@ def test_cli_export_and_bad_format(town, tmp_path):
     assert proc.returncode == 2 and "expected one of mcap, rosbag2" in proc.stderr
     with pytest.raises(TetherError, match="already exists"):
         export(town, tmp_path / "b", fmt="rosbag2")
+
+
+def test_fast_marker_encoding_is_byte_identical_to_rosbags(town, tmp_path):
+    """The NumPy CDR path for links and robot markers against rosbags' own serializer."""
+    from tether.export.ros2 import FRAME_ID, Messages
+
+    msgs = Messages(load_run(town))
+    for k in (0, 7, 25):
+        t = float(msgs.run.frame_times_s[k])
+        for name, points, fast, mtype, scale in (
+            ("links", msgs.link_points, msgs.links, 5, 0.25 * msgs.rad),
+            ("robots", msgs.robot_points, msgs.robot_markers, 7, 2 * msgs.rad),
+        ):
+            pts, cols = points(k)
+            assert len(pts) > 0
+            slow = msgs.marker_array(
+                [
+                    msgs.marker(
+                        t,
+                        name,
+                        mtype,
+                        points=[msgs.point(p) for p in pts],
+                        colours=[msgs.colour(c) for c in cols],
+                        scale=scale,
+                    )
+                ]
+            )
+            assert fast(k, t) == slow, (name, k)
+    assert msgs.header(0.0).frame_id == FRAME_ID
+    # and with no links at all (an empty sequence needs no alignment padding)
+    msgs.run.link_offsets[:] = 0
+    slow = msgs.marker_array([msgs.marker(0.0, "links", 5, scale=0.25 * msgs.rad)])
+    assert msgs.links(0, 0.0) == slow

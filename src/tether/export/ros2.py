@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from tether.errors import TetherError
+from tether.export.cdr import point_marker_array
 from tether.viz import style
 from tether.viz.runfolder import RunData, load_run
 
@@ -154,7 +155,13 @@ class Messages:
         msg = self.T["geometry_msgs/msg/PoseArray"](header=self.header(t_s), poses=poses)
         return self.cdr(msg, "geometry_msgs/msg/PoseArray")
 
-    def robot_markers(self, k: int, t_s: float) -> bytes:
+    def xyz(self, points: np.ndarray) -> np.ndarray:
+        out = np.zeros((len(points), 3))
+        out[:, : points.shape[1]] = points
+        return out
+
+    def robot_points(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Robot positions ``(n, 3)`` and their colours ``(n, 4)`` at frame ``k``."""
         run = self.run
         cols = style.robot_colours(
             run.n_robots,
@@ -163,23 +170,27 @@ class Messages:
             leader=run.leader,
             connected=None if run.connected is None else run.connected[k],
         )
-        pts = [self.point(p) for p in run.positions_m[k]]
-        m = self.marker(
-            t_s, "robots", 7, points=pts, colours=[self.colour(c) for c in cols], scale=2 * self.rad
-        )
-        return self.marker_array([m])
+        return self.xyz(run.positions_m[k]), cols
 
-    def links(self, k: int, t_s: float) -> bytes:
+    def link_points(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Link end points ``(2m, 3)`` (pairs) and their colours ``(2m, 4)`` at frame ``k``."""
         run = self.run
         lk = run.links(k)
-        nodes = run.nodes(k)
-        rgba = style.link_colours(run.link_margins(k)) if len(lk) else np.zeros((0, 4))
-        pts, cols = [], []
-        for (i, j), c in zip(lk, rgba, strict=True):
-            pts += [self.point(nodes[i]), self.point(nodes[j])]
-            cols += [self.colour(c), self.colour(c)]
-        m = self.marker(t_s, "links", 5, points=pts, colours=cols, scale=0.25 * self.rad)
-        return self.marker_array([m])
+        if not len(lk):
+            return np.zeros((0, 3)), np.zeros((0, 4))
+        nodes = self.xyz(run.nodes(k))
+        pts = np.empty((2 * len(lk), 3))
+        pts[0::2], pts[1::2] = nodes[lk[:, 0]], nodes[lk[:, 1]]
+        rgba = np.repeat(style.link_colours(run.link_margins(k)), 2, axis=0)
+        return pts, rgba
+
+    def robot_markers(self, k: int, t_s: float) -> bytes:
+        pts, cols = self.robot_points(k)
+        return point_marker_array(ns_of(t_s), FRAME_ID, "robots", 7, pts, cols, 2 * self.rad)
+
+    def links(self, k: int, t_s: float) -> bytes:
+        pts, cols = self.link_points(k)
+        return point_marker_array(ns_of(t_s), FRAME_ID, "links", 5, pts, cols, 0.25 * self.rad)
 
     # ----------------------------------------------------------- once
     def plan(self, t_s: float) -> bytes | None:
