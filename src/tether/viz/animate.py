@@ -79,12 +79,13 @@ class _Painter:
         aspect = float((box[1, 1] - box[0, 1]) / max(box[1, 0] - box[0, 0], 1e-9))
         three_d = run.dim == 3
         strip = _strip_series(run)
-        ratios = [max(min(aspect, 1.6), 0.45) * 4]
+        axes_w_in = width_in * 4 / 5.25 * 0.82  # the plots' column, less its labels
+        ratios = [axes_w_in * max(min(aspect, 1.6), 0.35)]  # the top view at its own aspect
         if three_d:
-            ratios.append(1.2)
+            ratios.append(axes_w_in * 0.3)
         if strip is not None:
-            ratios.append(0.9)
-        height_in = width_in * 0.62 * sum(ratios) / 4 + 0.6
+            ratios.append(axes_w_in * 0.2)
+        height_in = sum(ratios) + 0.7 * len(ratios) + 0.3
         self.fig = plt.figure(figsize=(width_in, height_in), dpi=dpi)
         gs = self.fig.add_gridspec(len(ratios), 2, height_ratios=ratios, width_ratios=[4, 1.25])
         self.ax = self.fig.add_subplot(gs[0, 0])

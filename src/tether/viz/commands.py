@@ -65,7 +65,7 @@ def view_command(
     for note in run.notes:
         say(f"note: {note}")
     result = write_replay(run, out, budget_bytes=int(max_mb * 1e6))
-    thinned = f", every {result.stride}th recorded step" if result.stride > 1 else ""
+    thinned = f", 1 in {result.stride} recorded steps" if result.stride > 1 else ""
     say(
         f"replay: {result.path} ({_mb(result.bytes)}, {result.n_frames} frames{thinned}, "
         f"{time.perf_counter() - start:.1f} s)"

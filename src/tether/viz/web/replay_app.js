@@ -97,7 +97,7 @@ async function main() {
   document.getElementById("title").textContent = m.name + (m.strategy ? " (" + m.strategy + ")" : "");
   const notes = [];
   notes.push(m.n_robots + " robots, " + m.dim + "-D, " + m.n_frames_recorded + " recorded steps" +
-    (m.stride > 1 ? ", every " + m.stride + "th shown (size budget)" : ""));
+    (m.stride > 1 ? ", 1 in " + m.stride + " shown (size budget)" : ""));
   notes.push("link margin = 1 - distance / " + m.range_m + " m");
   for (const s of m.notes || []) notes.push(s);
   document.getElementById("notes").textContent = notes.join(" · ");

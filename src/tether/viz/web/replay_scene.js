@@ -2,6 +2,8 @@
 // z is up; all coordinates are metres, as in the run folder.
 "use strict";
 
+const TRAIL_FRAMES = 500;
+
 function hexColour(hex) { return new THREE.Color(hex); }
 
 function lerpStops(stops, u) {
@@ -291,7 +293,8 @@ class ReplayScene {
     g.attributes.position.needsUpdate = true;
     g.attributes.color.needsUpdate = true;
     g.setDrawRange(0, (hi - lo) * 2);
-    this.trails.geometry.setDrawRange(0, f * n * 2);
+    const from = Math.max(0, f - TRAIL_FRAMES);  // the last TRAIL_FRAMES frames of each trail
+    this.trails.geometry.setDrawRange(from * n * 2, (f - from) * n * 2);
     if (A.map_first_seen) this.paintMap(f);
     if (this.follow) this.orbit.target.copy(this.centroid(f)), this.orbit.update();
     this.frame = f;
