@@ -309,7 +309,6 @@ def _stream(run: RunData, msgs: Messages) -> Iterator[tuple[str, str, int, bytes
     ]
     step_col = np.asarray(steps.get("step", np.zeros(0, np.int64)))
     step_t = run.step_times_s(step_col) if len(step_col) else np.zeros(0)
-    frame_pos = {int(s): k for k, s in enumerate(run.frame_steps)}
     # merge per-step metrics and per-frame messages in time order
     events = [(float(t), 0, i) for i, t in enumerate(step_t)]
     events += [(float(t), 1, k) for k, t in enumerate(times)]
@@ -333,7 +332,6 @@ def _stream(run: RunData, msgs: Messages) -> Iterator[tuple[str, str, int, bytes
         if first is not None and k in known_frames:
             values = np.where(first <= k, np.where(grid.occupied, 100, 0), -1)
             yield "/tether/known_map", "nav_msgs/msg/OccupancyGrid", tn, msgs.occupancy(t, values)
-    del frame_pos
 
 
 def _qos_yaml(transient: bool) -> str:
