@@ -204,3 +204,29 @@ def test_exploration_map_fills_in_as_robots_explore(browser, tmp_path):
         assert page.errors == []
     finally:
         page.close()
+
+
+def test_links_to_the_base_station_end_at_it(browser, tmp_path):
+    """After the core refactor exploration runs record links; index n_robots is the BS."""
+    import json
+
+    import pyarrow as pa
+
+    run_dir = tmp_path / "run"
+    make_run_folder(run_dir, n_robots=4, n_steps=6, dim=2)
+    summary = json.loads((run_dir / "summary.json").read_text())
+    summary["base_m"] = [-30.0, 12.5]
+    (run_dir / "summary.json").write_text(json.dumps(summary))
+    links = {"step": [0, 0, 3], "i": [0, 1, 2], "j": [4, 2, 4]}  # 4 = the base station
+    pq.write_table(pa.table(links), run_dir / "links.parquet")
+    page = Page(browser, write_replay(run_dir, tmp_path / "r.html").path)
+    try:
+        assert page.js("window.tether.drawnLinks()") == 2
+        ends = np.asarray(page.js("window.tether.linkEnds()")).reshape(-1, 3)
+        assert np.any(np.all(np.abs(ends[:, :2] - [-30.0, 12.5]) < 1e-3, axis=1))
+        page.page.fill("#slider", "3")
+        ends = np.asarray(page.js("window.tether.linkEnds()")).reshape(-1, 3)
+        assert len(ends) == 2 and np.allclose(ends[1, :2], [-30.0, 12.5], atol=1e-3)
+        assert page.errors == []
+    finally:
+        page.close()

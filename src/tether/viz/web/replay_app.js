@@ -201,6 +201,7 @@ async function main() {
     webgl: scene !== null,
     markerPositions: () => (scene ? scene.markerPositions() : []),
     drawnLinks: () => (scene ? scene.links.geometry.drawRange.count / 2 : 0),
+    linkEnds: () => (scene ? Array.from(scene.linkPos.subarray(0, scene.links.geometry.drawRange.count * 3)) : []),
     playing: () => playing,
     visibility: () => {
       const out = {};
