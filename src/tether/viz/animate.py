@@ -110,12 +110,13 @@ class _Painter:
             cb.ax.tick_params(labelsize=7)
         ax.set_xlim(box[0, 0], box[1, 0])
         ax.set_ylim(box[0, 1], box[1, 1])
+        overlays = []  # drawn with the moving artists, in z order, over a changing map
         if run.planned_path_m is not None:
             p = run.planned_path_m
-            ax.plot(p[:, 0], p[:, 1], ls="--", color=style.PATH, lw=1.4, zorder=2)
+            overlays += ax.plot(p[:, 0], p[:, 1], ls="--", color=style.PATH, lw=1.4, zorder=2)
         if run.targets_m is not None:
             g = run.targets_m
-            ax.scatter(
+            target = ax.scatter(
                 g[:, 0],
                 g[:, 1],
                 marker="*",
@@ -124,8 +125,9 @@ class _Painter:
                 edgecolors=style.ROBOT_EDGE,
                 zorder=5,
             )
+            overlays.append(target)
         if run.base_m is not None:
-            ax.scatter(
+            base = ax.scatter(
                 [run.base_m[0]],
                 [run.base_m[1]],
                 marker="s",
@@ -134,6 +136,8 @@ class _Painter:
                 edgecolors=style.ROBOT_EDGE,
                 zorder=5,
             )
+            overlays.append(base)
+        self.overlays = overlays
         self.trails = LineCollection([], linewidths=0.8, colors="#555555", alpha=0.35, zorder=2)
         ax.add_collection(self.trails)
         self.links = LineCollection([], linewidths=1.3, zorder=3)
@@ -193,9 +197,10 @@ class _Painter:
             top, side = self.ax.get_position(), self.side.get_position()
             self.side.set_position((top.x0, side.y0, top.width, side.height))
             self.side.set_xlim(self.ax.get_xlim())
-        self.animated = [self.trails, self.links, self.dots, self.title]
+        top_view = [*self.overlays, self.trails, self.links, self.dots]
         if self.first_seen is not None and self.map_img is not None:
-            self.animated.insert(0, self.map_img)
+            top_view.append(self.map_img)
+        self.animated = [*sorted(top_view, key=lambda a: a.get_zorder()), self.title]
         if self.side is not None:
             self.animated += [self.side_links, self.side_dots]
         if self.cursor is not None:
