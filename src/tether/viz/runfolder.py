@@ -158,15 +158,10 @@ def _strategy_params(scenario: Any) -> Any:
 
 def _range_m(scenario: Any, params: Any) -> float:
     """Link range for margins: the strategy's link range, else the sensing range."""
-    for key in ("comm_range_m", "rs_m"):
-        value = getattr(params, key, None)
-        if value is None and scenario is not None:
-            value = scenario.strategy.params.get(key)
-        if isinstance(value, int | float) and value > 0:
-            return float(value)
-    if scenario is not None:
-        return float(scenario.sensing.range_m)
-    return 1.0
+    from tether.viz.plots import link_range_m
+
+    value = link_range_m(scenario, params)
+    return 1.0 if value is None else value
 
 
 def _path_and_targets(scenario: Any) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -39,6 +39,8 @@ CURSOR = "#222222"
 CONNECTED = "#1f77b4"
 DISCONNECTED = "#ff7f0e"
 ROBOT_EDGE = "#1a1a1a"
+TRAIL = "#555555"
+LINK_PLAIN = "#7f93a8"  # a link where no range is known to measure its margin by
 
 FREE = "#ffffff"
 OCCUPIED = "#2e2e2e"
@@ -66,7 +68,8 @@ ROLE_CYCLE = (
 #: Link colour by margin in [0, 1]: red (about to break) -> amber -> green (well connected).
 LINK_CMAP = LinearSegmentedColormap.from_list("tether_link", [LINK_BAD, LINK_MID, LINK_GOOD])
 #: Obstacle height seen from above: light (low) to dark (tall) grey-blue.
-HEIGHT_CMAP = LinearSegmentedColormap.from_list("tether_height", ["#b9c3cf", "#5b6b7f", "#1c2633"])
+HEIGHT_STOPS = ("#b9c3cf", "#5b6b7f", "#1c2633")
+HEIGHT_CMAP = LinearSegmentedColormap.from_list("tether_height", list(HEIGHT_STOPS))
 #: Cell states of a map: 0 free, 1 occupied, 2 unknown free, 3 unknown occupied.
 MAP_CMAP = ListedColormap([FREE, OCCUPIED, UNKNOWN, UNKNOWN_OCCUPIED], name="tether_map")
 
@@ -223,9 +226,14 @@ def draw_obstacles_side(
     *,
     axis: int = 1,
     span_m: tuple[float, float] | None = None,
+    density: bool = False,
 ) -> Any:
     """Side view (x horizontal, z vertical) of a 3-D grid: occupied anywhere along ``axis``
-    (only within ``span_m`` along that axis, e.g. the y range of the top view)."""
+    (only within ``span_m`` along that axis, e.g. the y range of the top view).
+
+    With ``density`` a cell of the view is the darker the more of the span behind it is
+    occupied (a wall seen edge-on is solid, rooms' cross walls stay faint), so a view
+    through a whole office is not one grey block."""
     if grid is None or grid.dim != 3:
         return None
     occ = grid.occupied
@@ -234,12 +242,20 @@ def draw_obstacles_side(
         hi = int(np.ceil((span_m[1] - grid.origin_m[axis]) / grid.resolution_m))
         lo, hi = max(lo, 0), min(max(hi, lo + 1), occ.shape[axis])
         occ = np.take(occ, np.arange(lo, hi), axis=axis) if hi > lo else occ[:0]
-    occ = occ.any(axis=axis) if occ.shape[axis] else np.zeros(np.delete(grid.shape, axis), bool)
+    depth = occ.shape[axis]
+    frac = occ.mean(axis=axis) if depth else np.zeros(np.delete(grid.shape, axis))
     b = grid.bounds_m
     keep = [0, 1, 2]
     keep.remove(axis)
     ext = [float(b[0, keep[0]]), float(b[1, keep[0]]), float(b[0, 2]), float(b[1, 2])]
-    shown = np.ma.masked_where(~occ, np.ones(occ.shape))
+    if density:
+        rgba = np.zeros((*frac.T.shape, 4))
+        rgba[..., :3] = to_rgba(UNKNOWN_OCCUPIED)[:3]
+        rgba[..., 3] = np.where(frac.T > 0, 0.2 + 0.8 * frac.T, 0.0)
+        return ax.imshow(
+            rgba, origin="lower", extent=ext, interpolation="nearest", aspect="auto", zorder=0
+        )
+    shown = np.ma.masked_where(frac <= 0, np.ones(frac.shape))
     return ax.imshow(
         shown.T,
         origin="lower",
@@ -261,8 +277,21 @@ def legend_handles(
     path: bool = False,
     links: bool = True,
     unknown: bool = False,
+    path_label: str = "planned path",
+    link_margins: bool = True,
+    obstacles: str | None = None,
+    map_classes: bool = False,
+    trail: bool = False,
+    boundary: bool = False,
+    robots: bool = True,
 ) -> list[Any]:
-    """Legend entries for what a picture shows, in the one look."""
+    """Legend entries for what a picture shows, in the one look.
+
+    ``obstacles`` is ``"2d"`` (occupied cells) or ``"3d"`` (footprints shaded by
+    height); ``map_classes`` lists the four cell states of a known map (free, occupied,
+    unknown, unknown but occupied in the true map); ``link_margins=False`` gives one
+    plain link entry (no range known to colour links by).
+    """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -276,22 +305,37 @@ def legend_handles(
         out += [dot(c, f"robot: {r}") for r, c in roles.items()]
     elif exploration:
         out += [dot(CONNECTED, "robot, connected to BS"), dot(DISCONNECTED, "robot, out of comm")]
-    else:
+    elif robots:
         out.append(dot(ROBOT, "robot"))
     if leader:
-        out.append(dot(LEADER, "leader"))
+        out.append(dot(LEADER, "leader", size=9))
     if base_station:
         out.append(dot(BASE_STATION, "base station", marker="s", size=9))
     if targets:
         out.append(dot(TARGET, "target", marker="*", size=11))
     if path:
-        out.append(Line2D([], [], color=PATH, lw=1.5, ls="--", label="planned path"))
-    if links:
+        out.append(Line2D([], [], color=PATH, lw=1.5, ls="--", label=path_label))
+    if trail:
+        out.append(Line2D([], [], color=TRAIL, lw=1.0, alpha=0.6, label="robot trail"))
+    if links and link_margins:
         out.append(Line2D([], [], color=LINK_GOOD, lw=2, label="link, strong"))
         out.append(Line2D([], [], color=LINK_BAD, lw=2, label="link, near range"))
+    elif links:
+        out.append(Line2D([], [], color=LINK_PLAIN, lw=2, label="link"))
     if unknown:
         out.append(Patch(fc=UNKNOWN, ec="#888888", label="unknown"))
         out.append(Patch(fc=OCCUPIED, label="occupied (known)"))
+    if map_classes:
+        out.append(Patch(fc=FREE, ec="#888888", label="free (known)"))
+        out.append(Patch(fc=OCCUPIED, label="occupied (known)"))
+        out.append(Patch(fc=UNKNOWN, ec="#888888", label="unknown"))
+        out.append(Patch(fc=UNKNOWN_OCCUPIED, label="unknown, obstacle in true map"))
+    if obstacles == "2d":
+        out.append(Patch(fc=OCCUPIED, label="obstacle / wall"))
+    elif obstacles == "3d":
+        out.append(Patch(fc=HEIGHT_STOPS[1], label="building / wall (darker: taller)"))
+    if boundary:
+        out.append(Patch(fc="none", ec=OCCUPIED, lw=1.5, label="world boundary"))
     return out
 
 
@@ -312,7 +356,7 @@ def palette() -> dict[str, Any]:
         "unknown_occupied": UNKNOWN_OCCUPIED,
         "background": BACKGROUND,
         "link_stops": [LINK_BAD, LINK_MID, LINK_GOOD],
-        "height_stops": ["#b9c3cf", "#5b6b7f", "#1c2633"],
+        "height_stops": list(HEIGHT_STOPS),
         "role_cycle": list(ROLE_CYCLE),
     }
 
