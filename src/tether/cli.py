@@ -148,38 +148,67 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
 @app.command("list")
 def list_() -> None:
     """List built-in scenarios, strategies and scenes."""
-    import tether.world.scenes  # noqa: F401
     from tether.config import builtin_scenarios
-    from tether.registry import SCENES
-    from tether.strategies import load_builtin_strategies
+    from tether.plugins import load_builtins
 
-    out.print("scenarios:  " + ", ".join(builtin_scenarios()))
-    out.print("strategies: " + ", ".join(load_builtin_strategies()))
-    out.print("scenes:     " + ", ".join(SCENES.names()))
+    names = load_builtins()
+    out.print("scenarios:  " + ", ".join(builtin_scenarios()), markup=False)
+    out.print("strategies: " + ", ".join(names["strategies"]), markup=False)
+    out.print("scenes:     " + ", ".join(names["scenes"]), markup=False)
 
 
-def main() -> None:
-    """Entry point: run the app, turning user errors into one line on stderr."""
+def _usage_error_class() -> type[Exception]:
+    """The click exception class behind typer's usage errors, found without importing click.
+
+    typer bundles its own copy of click (``typer._click``) in recent versions and
+    depends on ``click`` in older ones; ``typer.BadParameter`` is public in both,
+    and its bases include the ``ClickException`` every usage error derives from.
+    """
+    for cls in typer.BadParameter.__mro__:
+        if cls.__name__ == "ClickException":
+            return cls
+    return typer.BadParameter  # pragma: no cover (every typer so far has one)
+
+
+def _usage_line(exc: Exception) -> str:
+    """``error: <what> (see `tether <command> --help`)`` for a usage error."""
+    message = " ".join(str(exc.format_message()).split())  # type: ignore[attr-defined]
+    ctx = getattr(exc, "ctx", None)
+    command = getattr(ctx, "command_path", None) or "tether"
+    if not command.startswith("tether"):
+        command = "tether " + command.split(" ", 1)[-1] if " " in command else "tether"
+    return f"error: {message} (see `{command} --help`)"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: run the app, turning user errors into one line on stderr.
+
+    Exit codes: 0 success, 2 bad input (one ``error:`` line naming the file or
+    option, the field and the fix; usage errors too), 1 an internal error (one
+    line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted.
+    """
     try:
-        app(standalone_mode=False)
+        app(args=argv, prog_name="tether", standalone_mode=False)
     except TetherError as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)
     except (typer.Exit, SystemExit) as exc:
         code = getattr(exc, "exit_code", getattr(exc, "code", 0))
         sys.exit(code or 0)
-    except typer.Abort:
+    except (typer.Abort, KeyboardInterrupt):
+        err.print("aborted", highlight=False, markup=False)
         sys.exit(130)
-    except Exception as exc:  # click usage errors and anything unexpected
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            sys.exit(exc.exit_code)
+    except Exception as exc:  # usage errors, and anything unexpected
+        if isinstance(exc, _usage_error_class()):
+            err.print(_usage_line(exc), highlight=False, markup=False, soft_wrap=True)
+            sys.exit(2)
+        if type(exc).__name__ == "Abort":  # click's own Abort (Ctrl-C at a prompt)
+            sys.exit(130)
         if os.environ.get("TETHER_DEBUG"):
             raise
+        message = " ".join(str(exc).split())
         err.print(
-            f"error: internal error {type(exc).__name__}: {exc} "
+            f"error: internal error {type(exc).__name__}: {message} "
             "(set TETHER_DEBUG=1 for the traceback and please report it)",
             highlight=False,
             markup=False,
