@@ -14,6 +14,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from tether.config import MAX_SEED
 from tether.errors import TetherError
 
 app = typer.Typer(
@@ -50,7 +51,9 @@ def run(
     out_dir: Annotated[
         Path | None, typer.Option("--out", "-o", help="Run folder (default: runs/<name>-...)")
     ] = None,
-    seed: Annotated[int | None, typer.Option(help="Override the scenario's seed.")] = None,
+    seed: Annotated[
+        int | None, typer.Option(min=0, max=MAX_SEED, help="Override the scenario's seed.")
+    ] = None,
     set_: SetOpt = None,
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
 ) -> None:
@@ -61,7 +64,11 @@ def run(
     from tether.runner import run as run_scenario
 
     sc = _load(scenario, set_)
-    out.print(f"running [bold]{sc.name}[/] ({sc.strategy.name}, {sc.team.n_robots} robots) ...")
+    out.print(
+        f"running {sc.name} ({sc.strategy.name}, {sc.team.n_robots} robots) ...",
+        markup=False,
+        highlight=False,
+    )
     outcome = run_scenario(sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None)
     s = outcome.summary
     keys = [
@@ -84,8 +91,9 @@ def run(
     for k in keys:
         if k in s:
             v = s[k]
-            out.print(f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}")
-    out.print(f"results: [bold]{outcome.path}[/]")
+            line = f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}"
+            out.print(line, markup=False, highlight=False)
+    out.print(f"results: {outcome.path}", markup=False, highlight=False, soft_wrap=True)
 
 
 @app.command()
@@ -94,12 +102,13 @@ def sweep(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Sweep folder.")] = Path(
         "runs/sweep"
     ),
-    seeds: Annotated[int, typer.Option(help="Seeds per parameter combination.")] = 1,
+    seeds: Annotated[int, typer.Option(min=1, help="Seeds per parameter combination.")] = 1,
     executor: Annotated[
         str, typer.Option(help="Where trials run: serial, processes or dask.")
     ] = "serial",
     workers: Annotated[
-        int | None, typer.Option(help="Processes (processes, local dask); default: all cores.")
+        int | None,
+        typer.Option(min=1, help="Processes (processes, local dask); default: all cores."),
     ] = None,
     address: Annotated[
         str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
@@ -121,28 +130,33 @@ def sweep(
         executor=executor,
         workers=workers,
         address=address,
-        progress=lambda m: out.print(m),
+        progress=lambda m: out.print(m, markup=False, highlight=False, soft_wrap=True),
     )
-    out.print(f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}")
+    out.print(
+        f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}",
+        markup=False,
+        highlight=False,
+    )
     for fig in result.figures:
-        out.print(f"figure: {fig}")
+        out.print(f"figure: {fig}", markup=False, highlight=False)
 
 
 @app.command()
 def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
-    """Check a scenario (schema, strategy parameters, map, initial connectivity) without running."""
-    import numpy as np
+    """Check a scenario (schema, strategy parameters, map, initial team, memory) without running.
 
-    from tether.runner import build, build_world, strategy_class, strategy_params
+    Runs exactly the checks `tether run` runs before simulating (tether.runner.build),
+    so a scenario that validates is one that runs.
+    """
+    from tether.runner import build
 
     sc = _load(scenario, set_)
-    cls = strategy_class(sc)
-    if hasattr(cls, "run_scenario"):  # exploration strategies build their team themselves
-        strategy_params(sc, cls)
-        build_world(sc, np.random.default_rng(sc.seed))
-    else:
-        build(sc)
-    out.print(f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)")
+    build(sc)
+    out.print(
+        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)",
+        markup=False,
+        highlight=False,
+    )
 
 
 @app.command("list")
@@ -205,6 +219,9 @@ def main(argv: list[str] | None = None) -> None:
         if type(exc).__name__ == "Abort":  # click's own Abort (Ctrl-C at a prompt)
             sys.exit(130)
         if os.environ.get("TETHER_DEBUG"):
+            details = getattr(exc, "details", None)  # e.g. the traceback of a failed trial
+            if details:
+                print(details, file=sys.stderr)
             raise
         message = " ".join(str(exc).split())
         err.print(

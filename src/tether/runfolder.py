@@ -98,11 +98,19 @@ def write_rows(path: Path, rows: list[dict[str, Any]]) -> Path:
     if rows:
         keys = list(dict.fromkeys(k for r in rows for k in r))
         cols = {k: [jsonable(r.get(k)) for r in rows] for k in keys}
-        table = pa.table({k: pa.array(v) for k, v in cols.items()})
+        table = pa.table({k: _column(v) for k, v in cols.items()})
     else:
         table = pa.table({"step": pa.array([], pa.int64()), "kind": pa.array([], pa.string())})
     atomic_write(path, lambda tmp: pq.write_table(table, tmp))
     return path
+
+
+def _column(values: list[Any]) -> pa.Array:
+    """One table column; values of mixed types (``15.0`` and ``'15.0'``) become text."""
+    try:
+        return pa.array(values)
+    except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError, OverflowError):
+        return pa.array([None if v is None else json.dumps(v) for v in values], pa.string())
 
 
 def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
