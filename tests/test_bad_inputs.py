@@ -417,7 +417,7 @@ CASES: dict[str, Case] = {
     ),
     "sweep: too many combinations": Case(
         "sweep",
-        _set("sweep", {f"strategy.params.{k}": list(np.linspace(0.1, 1, 30))
+        _set("sweep", {f"strategy.params.{k}": np.linspace(0.1, 1, 30).tolist()
                        for k in ("gamma", "d0_m", "min_separation_m")}),
     ),  # fmt: skip
     # ---- --set on the command line (validate and run alike)
@@ -554,12 +554,12 @@ OUT_CASES: dict[str, Callable[[Path], str]] = {
 @pytest.mark.parametrize("command", ["run", "sweep"])
 def test_bad_out_is_one_line_and_leaves_nothing(name, command, tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    out = OUT_CASES[name](tmp_path)
-    before = sorted(p.name for p in tmp_path.rglob("*"))
     scenario = tmp_path / "s.yaml"
     data = silent(tmp_path)
     data["sim"]["max_steps"] = 3
     scenario.write_text(yaml.safe_dump(data))
+    out = OUT_CASES[name](tmp_path)
+    before = sorted(p.name for p in tmp_path.rglob("*"))
     args = ["--no-figures"] if command == "run" else []
     code, _, err = tether(capsys, command, str(scenario), "--out", out, *args)
     assert_one_line(code, err, "--out")

@@ -16,7 +16,14 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from tether.errors import ScenarioError
 
@@ -127,7 +134,7 @@ class StrategyConfig(_Strict):
 class Scenario(_Strict):
     """A complete, validated scenario."""
 
-    name: str = Field(default="scenario", min_length=1, max_length=100, pattern=r"^[^/\\\x00]+$")
+    name: str = Field(default="scenario", min_length=1, max_length=100)
     description: str = ""
     seed: int = Field(default=0, ge=0, le=MAX_SEED)
     world: WorldConfig = Field(default_factory=WorldConfig)
@@ -142,6 +149,15 @@ class Scenario(_Strict):
             description="dotted scenario key -> values, run by `tether sweep` (grid of all values)",
         )
     )
+
+    @field_validator("name")
+    @classmethod
+    def _name_is_a_file_name(cls, value: str) -> str:
+        if any(c in value for c in "/\\\x00") or value in (".", ".."):
+            raise ValueError(
+                "must not contain '/' or '\\' (it names the run folder); use e.g. 'a-b'"
+            )
+        return value
 
     # Where the scenario came from (for error messages and relative paths); not a YAML key.
     _source: str = "<scenario>"
@@ -189,7 +205,7 @@ def format_validation_error(source: str, err: ValidationError, prefix: str = "")
     elif kind == "missing":
         msg = "required field is missing"
     else:
-        msg = first["msg"]
+        msg = str(first["msg"]).removeprefix("Value error, ")
         if "input" in first and not isinstance(first["input"], dict | list):
             got = repr(first["input"])
             msg += f" (got {got if len(got) <= 60 else got[:57] + '...'})"

@@ -142,26 +142,39 @@ class RunFolder:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        if self.path.exists():
-            if not self.path.is_dir():
+        self._created: list[Path] = []  # parent folders made here, removed again on abort
+        try:
+            exists = self.path.exists()
+            if exists and not self.path.is_dir():
                 raise OutputError(f"{self.path}: exists and is not a folder; choose another --out")
-            if any(self.path.iterdir()) and not is_run_folder(self.path):
+            if exists and any(self.path.iterdir()) and not is_run_folder(self.path):
                 raise OutputError(
                     f"{self.path}: folder is not empty and not a tether run folder; choose a "
                     "new or empty folder for --out (tether replaces only its own run folders)"
                 )
-        try:
+            parent = self.path.absolute().parent
+            while not parent.exists() and parent != parent.parent:
+                self._created.append(parent)
+                parent = parent.parent
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.staging = Path(
                 tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.staging-")
             )
         except OSError as exc:
+            self._remove_created()
             raise OutputError(
                 f"{self.path}: cannot create the run folder ({exc.strerror or exc}); "
                 "choose a writable --out"
             ) from None
         os.chmod(self.staging, 0o777 & ~_UMASK)
         self.written: list[str] = []
+
+    def _remove_created(self) -> None:
+        for folder in self._created:  # deepest first
+            try:
+                folder.rmdir()
+            except OSError:
+                break
 
     def file(self, name: str) -> Path:
         self.written.append(name)
@@ -195,8 +208,13 @@ class RunFolder:
         return self.path
 
     def abort(self) -> None:
-        """Drop everything staged (the target folder is left as it was)."""
+        """Drop everything staged (the target folder is left as it was).
+
+        Parent folders created for the run are removed again if still empty, so a
+        failed run leaves nothing behind.
+        """
         shutil.rmtree(self.staging, ignore_errors=True)
+        self._remove_created()
 
 
 def git_hash() -> str | None:

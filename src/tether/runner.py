@@ -24,6 +24,7 @@ from pydantic import ValidationError
 from tether.config import (
     MAX_SEED,
     MAX_SWEEP_COMBINATIONS,
+    InitConfig,
     Scenario,
     format_validation_error,
     load_scenario,
@@ -31,7 +32,7 @@ from tether.config import (
     set_dotted,
     sweep_label,
 )
-from tether.errors import MapError, ScenarioError, TetherError
+from tether.errors import MapError, OutputError, ScenarioError, TetherError
 from tether.graph import is_connected
 from tether.limits import format_bytes, memory_budget_bytes
 from tether.plugins import load_builtins
@@ -266,21 +267,30 @@ def check_run_size(
     steps = scenario.sim.max_steps + 1
     recorded = scenario.sim.max_steps // scenario.output.record_every + 1
     links = 0 if pairs is None else len(pairs)
-    need = steps * 400  # a StepRecord and its values per step
-    need += recorded * n * (initial.dim + 2) * 8 * 2  # positions, then their table columns
-    need += recorded * links * 2 * 8 * 2  # link pairs, then their table columns
-    if pairs is not None and len(pairs) and sensor.occlusion and sensor.body_radius_m > 0:
+    records = steps * 400  # a StepRecord and its values per step
+    records += recorded * n * (initial.dim + 2) * 8 * 2  # positions, then their table columns
+    records += recorded * links * 2 * 8 * 2  # link pairs, then their table columns
+    occlusion = 0.0
+    core_sensing = type(strategy).sense is Strategy.sense
+    if core_sensing and links and sensor.occlusion and sensor.body_radius_m > 0:
         degree = np.bincount(pairs.ravel(), minlength=initial.n).astype(float)
-        if type(strategy).sense is Strategy.sense:
-            need = max(need, float(degree @ degree) * 120)  # occlusion test arrays, per step
-    budget = memory_budget_bytes()
-    if need > budget:
+        occlusion = float(degree @ degree) * 150  # the arrays of one step's occlusion test
+    need, budget = records + occlusion, memory_budget_bytes()
+    if need <= budget:
+        return
+    what = f"{initial.n:,} robots with {links:,} links at the start"
+    if occlusion > records:
         raise ScenarioError(
-            f"{scenario.source}: team.n_robots: {initial.n:,} robots ({links:,} links) over "
-            f"{scenario.sim.max_steps:,} steps need about {format_bytes(need)} of memory, more "
-            f"than the {format_bytes(budget)} allowed here; use fewer robots or steps, or raise "
-            "output.record_every"
+            f"{scenario.source}: team.n_robots: {what}: testing which robot bodies hide which "
+            f"links needs about {format_bytes(occlusion)} at every step, more than the "
+            f"{format_bytes(budget)} allowed here; use fewer robots, a shorter sensing.range_m, "
+            "or sensing.occlusion: false"
         )
+    raise ScenarioError(
+        f"{scenario.source}: team.n_robots: {what}: recording {scenario.sim.max_steps:,} steps "
+        f"needs about {format_bytes(need)}, more than the {format_bytes(budget)} allowed here; "
+        "use fewer robots or steps, or raise output.record_every"
+    )
 
 
 def place_team(
@@ -299,7 +309,11 @@ def _place_team(
             scenario.team.init, scenario.team.n_robots, world, rng, scenario.sensing.range_m
         )
     except ValueError as exc:
-        raise ScenarioError(f"{scenario.source}: team.init: {exc}") from None
+        head, sep, rest = str(exc).partition(": ")
+        field = f"team.init.{head}" if sep and head in InitConfig.model_fields else "team.init"
+        raise ScenarioError(
+            f"{scenario.source}: {field}: {rest if field != 'team.init' else exc}"
+        ) from None
     bad = ~world.points_free(positions)
     if bad.any():
         k = int(np.argmax(bad))
@@ -375,6 +389,13 @@ def run(
                 folder.save_figure(fig, name)
         summary = summarize(scenario, seed, result, wall)
         folder.commit(summary)
+    except OSError as exc:  # writing the run folder failed (disk full, removed, ...)
+        folder.abort()
+        if not str(getattr(exc, "filename", "") or "").startswith(str(folder.path.parent)):
+            raise
+        raise OutputError(
+            f"{path}: cannot write the run folder ({exc.strerror or exc}); choose another --out"
+        ) from None
     except BaseException:
         folder.abort()
         raise

@@ -49,11 +49,14 @@ def random_connected(
     dim = world.dim
     center = _default_center(world) if center is None else np.asarray(center, dtype=float)
     if not np.isfinite(center).all():
-        raise ValueError("the team's center must be finite")
+        raise ValueError("center: must be finite")
     if not world.points_free(center[None])[0]:
-        raise ValueError("the team's center is inside an obstacle or outside the world")
+        raise ValueError(
+            f"center: {center.tolist()} is inside an obstacle or outside the world; "
+            "move the team into free space"
+        )
     if not (np.isfinite(spacing_m) and spacing_m > 0):
-        raise ValueError(f"spacing_m must be a positive finite number (got {spacing_m!r})")
+        raise ValueError(f"spacing_m: must be a positive finite number (got {spacing_m!r})")
     pos = np.empty((n, dim))
     pos[0] = center
     count = 1
@@ -187,13 +190,22 @@ def initial_positions(
     """Place the team as ``cfg`` says (see :class:`tether.config.InitConfig`)."""
     center = None if cfg.center is None else np.asarray(cfg.center, dtype=float)
     if center is not None and len(center) != world.dim:
-        raise ValueError(f"center must have {world.dim} coordinates")
+        raise ValueError(
+            f"center: must have {world.dim} coordinates for a {world.dim}-D world "
+            f"(got {len(center)})"
+        )
     if cfg.kind == "positions":
         if cfg.positions is None:
-            raise ValueError("kind 'positions' needs a 'positions' list")
-        pos = np.asarray(cfg.positions, dtype=float)
+            raise ValueError("positions: kind 'positions' needs a 'positions' list")
+        try:
+            pos = np.asarray(cfg.positions, dtype=float)
+        except ValueError:  # ragged
+            pos = np.empty(0)
         if pos.ndim != 2 or pos.shape != (n, world.dim):
-            raise ValueError(f"positions must be {n} points of {world.dim} coordinates")
+            raise ValueError(
+                f"positions: must be n_robots = {n} points of {world.dim} coordinates "
+                f"(got {len(cfg.positions)})"
+            )
         return pos
     if cfg.kind == "grid":
         return grid_positions(
@@ -201,7 +213,9 @@ def initial_positions(
         )
     if cfg.kind == "uniform":
         if cfg.extent_m is None or len(cfg.extent_m) not in (1, world.dim):
-            raise ValueError(f"kind 'uniform' needs extent_m with {world.dim} side lengths")
+            raise ValueError(
+                f"extent_m: kind 'uniform' needs extent_m with {world.dim} side lengths"
+            )
         return uniform_connected(
             n, world, rng, np.asarray(cfg.extent_m), range_m, cfg.min_separation_m, center
         )

@@ -25,7 +25,7 @@ from typing import Any
 from tether.errors import TetherError
 from tether.registry import Registry
 
-__all__ = ["EXECUTORS", "Trial", "TrialOutcome", "execute", "run_trial"]
+__all__ = ["EXECUTORS", "Trial", "TrialOutcome", "check_executor", "execute", "run_trial"]
 
 
 @dataclass(frozen=True)
@@ -154,6 +154,12 @@ def execute(
     address: str | None = None,
 ) -> Iterator[TrialOutcome]:
     """Run ``trials`` on the named executor, yielding each outcome as it finishes."""
+    n = check_executor(executor, workers, address)
+    return EXECUTORS.get(executor)(trials, n, address)
+
+
+def check_executor(executor: str, workers: int | None = None, address: str | None = None) -> int:
+    """Refuse an unknown executor, a bad worker count or a stray address; the worker count."""
     if executor not in EXECUTORS:
         raise TetherError(
             f"unknown executor {executor!r}; expected one of: {', '.join(EXECUTORS.names())}"
@@ -167,5 +173,4 @@ def execute(
             f"--address {address}: only the dask executor uses a scheduler address; "
             "add --executor dask or drop --address"
         )
-    n = workers if workers is not None else (os.cpu_count() or 1)
-    return EXECUTORS.get(executor)(trials, n, address)
+    return workers if workers is not None else (os.cpu_count() or 1)

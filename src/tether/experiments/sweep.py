@@ -20,7 +20,7 @@ import pyarrow.parquet as pq
 
 from tether.config import MAX_SWEEP_TRIALS, Scenario, scenario_from_dict, set_dotted, sweep_label
 from tether.errors import OutputError, TetherError
-from tether.experiments.executors import Trial, TrialOutcome, execute
+from tether.experiments.executors import Trial, TrialOutcome, check_executor, execute
 from tether.runfolder import is_run_folder, save_figure, write_rows, write_yaml
 from tether.runner import check_sweep, strategy_class
 from tether.viz.plots import links_over_time, series_over_time
@@ -155,14 +155,14 @@ def prepare_sweep_folder(scenario: Scenario, out_dir: str | Path) -> Path:
     cannot be created or written.
     """
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"{out}: exists and is not a folder; choose another --out")
-    if out.is_dir() and any(out.iterdir()) and not _is_sweep_folder(out):
-        raise OutputError(
-            f"{out}: folder is not empty and not a tether sweep folder; choose a new or empty "
-            "folder for --out (a sweep resumes only in its own folder)"
-        )
     try:
+        if out.exists() and not out.is_dir():
+            raise OutputError(f"{out}: exists and is not a folder; choose another --out")
+        if out.is_dir() and any(out.iterdir()) and not _is_sweep_folder(out):
+            raise OutputError(
+                f"{out}: folder is not empty and not a tether sweep folder; choose a new or "
+                "empty folder for --out (a sweep resumes only in its own folder)"
+            )
         out.mkdir(parents=True, exist_ok=True)
         write_yaml(out / SWEEP_SCENARIO, scenario.model_dump(mode="json"))
     except OSError as exc:
@@ -200,6 +200,7 @@ def run_sweep(
     the first failure is raised in one line: a :class:`TetherError` if every
     failure was bad input, else :class:`TrialsFailed` (an internal error).
     """
+    check_executor(executor, workers, address)
     check_sweep(scenario, strategy_class(scenario))
     trials = trials_of(scenario, out_dir, seeds)
     out = prepare_sweep_folder(scenario, out_dir)

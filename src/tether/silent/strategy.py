@@ -200,6 +200,7 @@ class SilentStrategy(Strategy):
                     f"{src}: {field}.function: cannot load {traj.function!r} ({exc}); "
                     "expected 'package.module:callable'"
                 ) from None
+            _check_time_function(path, world.dim, src, f"{field}.function")
         n = initial.n
         if params.leader is not None and not -n <= params.leader < n:
             raise ScenarioError(
@@ -337,6 +338,21 @@ class SilentStrategy(Strategy):
             out["path_length_m"] = self.trajectory.length_m
             out["path_progress"] = self.progress_m / max(self.trajectory.length_m, 1e-12)
         return out
+
+
+def _check_time_function(fn: TimeFunction, dim: int, source: str, field: str) -> None:
+    """The leader's function of time must give a finite point of ``dim`` coordinates."""
+    try:
+        point = np.asarray(fn(0.0), dtype=float)
+    except Exception as exc:  # the user's function: any failure is a problem of the input
+        raise ScenarioError(
+            f"{source}: {field}: calling it at t = 0 s raised {type(exc).__name__}: {exc}"
+        ) from None
+    if point.shape != (dim,) or not np.isfinite(point).all():
+        raise ScenarioError(
+            f"{source}: {field}: must return {dim} finite coordinates for a time in seconds "
+            f"(at t = 0 s it gave {point.tolist()})"
+        )
 
 
 def check_path_clear(path: Polyline, world: World, source: str, field: str) -> None:

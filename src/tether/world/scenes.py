@@ -96,7 +96,7 @@ def empty(
     size = check_size("empty", "size_m", size_m, 2)
     height = check_positive("empty", "height_m", height_m)
     res = check_positive("empty", "resolution_m", resolution_m)
-    shape = cells_of(np.append(size, height), res)
+    shape = cells_of(np.append(size, height), res, "empty")
     grid = OccupancyGrid(np.zeros(shape, dtype=bool), res, np.zeros(3))
     return World(dim=3, grid=grid, obstacle_points=np.empty((0, 3)), name="empty")
 
@@ -159,7 +159,10 @@ def user_points(
                 f"{path}: bounds_m: must be [[lower corner], [upper corner]] with {dim} "
                 f"numbers each (the file's points are {dim}-D), upper > lower (got {bounds_m!r})"
             )
-    grid = OccupancyGrid.from_points(points, bounds, res)
+    try:
+        grid = OccupancyGrid.from_points(points, bounds, res)
+    except ValueError as exc:
+        raise MapError(f"{path}: resolution_m: {exc}") from None
     keep = grid.inside(grid.to_cell(points))
     if not keep.any():
         raise MapError(
