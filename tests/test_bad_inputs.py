@@ -334,7 +334,27 @@ CASES: dict[str, Case] = {
     "connectivity: unknown preset": Case(
         "strategy.params.preset", _set("strategy.params.preset", "moon"), base=connectivity
     ),
+    "connectivity: radii out of order": Case(
+        "strategy.params",
+        _all(_set("strategy.params.rs_inner_m", 9.0), _set("strategy.params.rs_m", 5.0)),
+        base=connectivity,
+    ),
+    "connectivity: goal for a robot that does not exist": Case(
+        "strategy.params.external.robots",
+        _set("strategy.params.external.robots", [99]),
+        base=connectivity,
+    ),
+    "connectivity: goal with 2 coordinates in 3-D": Case(
+        "strategy.params.external.goals",
+        _set("strategy.params.external.goals", [[40, 50]]),
+        base=connectivity,
+    ),
     # ---- worlds and map files
+    "scene height inf": Case(
+        "height_m", _set("world", {"scene": "empty", "dim": 3, "params": {"height_m": 1e400}})
+    ),
+    "scene seed negative": Case("seed", _set("world.params", {"seed": -1})),
+    "map scene without a path": Case("world.params.path", _set("world.scene", "map")),
     "unknown scene": Case("world.scene", _set("world.scene", "mars")),
     "unknown scene parameter": Case(
         "world.params", _set("world.params", {"bounds": [[0, 0], [1, 1]]})
@@ -361,6 +381,9 @@ CASES: dict[str, Case] = {
     ),
     "ROS map: NaN origin": Case(
         "origin", _ros_yaml("image: img.png\nresolution: 0.1\norigin: [.nan, 0, 0]\n")
+    ),
+    "ROS map: origin far away": Case(
+        "origin", _ros_yaml("image: img.png\nresolution: 0.1\norigin: [1.0e+300, 0, 0]\n")
     ),
     "ROS map: image missing": Case(
         "image", _ros_yaml("image: none.png\nresolution: 0.1\norigin: [0, 0, 0]\n", image=False)
@@ -589,6 +612,21 @@ def test_bad_out_is_one_line_and_leaves_nothing(name, command, tmp_path, capsys,
     assert_one_line(code, err, "--out")
     after = sorted(p.name for p in tmp_path.rglob("*"))
     assert after == before  # no run folder, no staging folder, no parent folder left
+
+
+def test_an_unwritable_output_dir_is_refused_by_validate_and_run(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.txt").write_text("x")
+    data = silent(tmp_path)
+    data["output"] = {"dir": "f.txt/runs"}
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
+    for command in ("validate", "run"):
+        code, _, err = tether(capsys, command, "bad.yaml")
+        assert_one_line(code, err, "f.txt/runs", "cannot create")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.yaml", "f.txt"]
+    code, out, err = tether(capsys, "validate", "silent_demo")  # a valid one leaves nothing
+    assert code == 0 and "ok" in out, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.yaml", "f.txt"]
 
 
 def test_rerun_into_the_same_out_replaces_the_folder(tmp_path, capsys, monkeypatch):

@@ -148,10 +148,12 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
     Runs exactly the checks `tether run` runs before simulating (tether.runner.build),
     so a scenario that validates is one that runs.
     """
+    from tether.runfolder import check_writable
     from tether.runner import build
 
     sc = _load(scenario, set_)
     build(sc)
+    check_writable(sc.output.dir)  # where `tether run` would write (without --out)
     out.print(
         f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)",
         markup=False,

@@ -129,6 +129,34 @@ def is_run_folder(path: Path) -> bool:
     return (path / SUMMARY).is_file() or (path / SCENARIO).is_file()
 
 
+def check_writable(folder: str | Path) -> None:
+    """Refuse (:class:`OutputError`) a folder that run folders could not be created in.
+
+    Creates what is missing and a temporary folder inside, then removes all of it:
+    nothing is left, whatever the answer.
+    """
+    folder = Path(folder)
+    created: list[Path] = []
+    try:
+        here = folder.absolute()
+        while not here.exists() and here != here.parent:
+            created.append(here)
+            here = here.parent
+        folder.mkdir(parents=True, exist_ok=True)
+        os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".tether-check-"))
+    except OSError as exc:
+        raise OutputError(
+            f"{folder}: cannot create run folders here ({exc.strerror or exc}); choose a "
+            "writable output.dir or --out"
+        ) from None
+    finally:
+        for path in created:  # deepest first
+            try:
+                path.rmdir()
+            except OSError:
+                break
+
+
 class RunFolder:
     """The files of one run, staged and committed as a whole (see the module docstring).
 

@@ -122,8 +122,14 @@ class ConnectivityStrategyParams(_Strict):
 
     @model_validator(mode="after")
     def _consistent(self) -> ConnectivityStrategyParams:
-        self.connectivity()  # raises ValueError (e.g. "need 0 < R's < Rs") for bad radii
-        self.integrator()
+        try:  # ValueError such as "need 0 < R's < Rs" for radii out of order
+            self.connectivity()
+            self.integrator()
+        except ValueError as exc:
+            raise ValueError(
+                f"{exc} (R's = rs_inner_m, Rs = rs_m, Ro = ro_m, R'o = ro_outer_m, "
+                "Rc = rc_m, R'c = rc_outer_m)"
+            ) from None
         return self
 
     def connectivity(self) -> ConnectivityParams:

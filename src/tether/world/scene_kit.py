@@ -24,13 +24,22 @@ OFFICE_SIZE_M = (10.0, 15.0)
 
 
 def check_positive(scene: str, name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not 0 < value < float("inf")
+    ):
         raise ScenarioError(f"scene {scene!r}: {name}: must be a positive number (got {value!r})")
     return float(value)
 
 
 def check_number(scene: str, name: str, value: Any, lo: float, hi: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not lo <= value <= hi
+        or not np.isfinite(value)
+    ):
         raise ScenarioError(
             f"scene {scene!r}: {name}: must be a number in [{lo}, {hi}] (got {value!r})"
         )

@@ -207,6 +207,19 @@ def make_scene(name: str, rng: np.random.Generator | int | None = None, **params
             f"scene {name!r}: unknown parameter(s) {', '.join(unknown)}; "
             f"accepted: {', '.join(accepted + ['seed'])}"
         )
+    required = [
+        p.name
+        for p in inspect.signature(factory).parameters.values()
+        if p.default is inspect.Parameter.empty
+        and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
+        and p.name != "rng"
+    ]
+    missing = [p for p in required if p not in params]
+    if missing:
+        raise ScenarioError(
+            f"scene {name!r}: missing parameter(s) {', '.join(missing)}; "
+            f"e.g. world.params.{missing[0]}"
+        )
     return factory(np.random.default_rng(rng), **params)
 
 
