@@ -9,18 +9,20 @@ their module.
 
 from __future__ import annotations
 
+import tether.continuous.multi_target
 import tether.continuous.strategy
 import tether.recurrent.strategy
 import tether.sensing.links
 import tether.silent.strategy
 import tether.world.scenes  # noqa: F401  (the imports above and this one register)
-from tether.registry import LINK_MODELS, SCENES, STRATEGIES
+from tether.registry import LINK_MODELS, SCENES, STRATEGIES, TARGET_GENERATORS
 
 BUILTIN_MODULES = (
     tether.world.scenes,
     tether.sensing.links,
     tether.silent.strategy,
     tether.continuous.strategy,
+    tether.continuous.multi_target,
     tether.recurrent.strategy,
 )
 
@@ -31,4 +33,5 @@ def load_builtins() -> dict[str, list[str]]:
         "strategies": STRATEGIES.names(),
         "scenes": SCENES.names(),
         "link models": LINK_MODELS.names(),
+        "target generators": TARGET_GENERATORS.names(),
     }

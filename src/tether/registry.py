@@ -60,3 +60,4 @@ class Registry(Generic[T]):
 STRATEGIES: Registry[type] = Registry("strategy")
 SCENES: Registry[Callable] = Registry("scene")
 LINK_MODELS: Registry[Callable] = Registry("link model")
+TARGET_GENERATORS: Registry[type] = Registry("target generator")

@@ -121,9 +121,11 @@ class IntegrationStats:
     stalled: bool = False
 
 
-# evaluate(q) -> (lambda2 of q for the safeguard, cache); force(cache) -> f_lambda
+# evaluate(q) -> (lambda2 of q for the safeguard, cache); force(cache) -> f_lambda;
+# external(q, v, f_lambda) -> f_i, a feedback law evaluated at every sub-step
 Evaluate = Callable[[np.ndarray], tuple[float, Any]]
 Force = Callable[[Any], np.ndarray]
+External = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
 def integrate(
@@ -132,7 +134,7 @@ def integrate(
     dt_s: float,
     evaluate: Evaluate,
     force: Force,
-    external: np.ndarray,
+    external: np.ndarray | External,
     params: IntegratorParams,
     lambda2_min: float,
     current: tuple[float, Any] | None = None,
@@ -155,7 +157,9 @@ def integrate(
         ``force(cache) -> f_lambda`` ``(n, dim)``; called once per accepted
         sub-step (so a stateful estimator advances once per sub-step).
     external
-        ``(n, dim)`` external force ``f_i`` held over the period.
+        The external force ``f_i``: an ``(n, dim)`` array held over the period,
+        or a feedback law ``external(q, v, f_lambda) -> (n, dim)`` evaluated at
+        the start of every sub-step (a PD law must see the current state).
     current
         ``evaluate(q)`` if already known (reused from the previous period).
     box, box_margin_m
@@ -172,7 +176,8 @@ def integrate(
     t = 0.0
     while t < dt_s * (1 - 1e-12) and stats.substeps < params.max_substeps:
         lam = ev[0]
-        total = force(ev[1]) + external
+        f_lambda = force(ev[1])
+        total = f_lambda + (external(q, v, f_lambda) if callable(external) else external)
         h = min(dt_s - t, displacement_step(v, total, m, params.max_step_m))
         floor = lambda2_min + params.keep_fraction * (lam - lambda2_min)
         accepted = False

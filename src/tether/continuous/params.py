@@ -30,6 +30,17 @@ TABLE2: dict[str, dict[str, float]] = {
 }  # fmt: skip
 _OUTDOOR = TABLE2["outdoor"]
 
+# Table 2's traveling parameters (Table 3 for the experiment): Rgrid, sigma, v_cruise,
+# (x_c, x_M) as fractions of v_cruise, Rz; Delta t = 3 s is the targets' stay_s.
+TRAVEL_TABLE2: dict[str, dict[str, float]] = {
+    "outdoor": {"r_grid_m": 0.75, "sigma": 3.0, "v_cruise_mps": 3.0,
+                "xc_frac": 0.1, "xm_frac": 0.6, "rz_m": 1.8},
+    "office": {"r_grid_m": 0.25, "sigma": 3.0, "v_cruise_mps": 1.0,
+               "xc_frac": 0.1, "xm_frac": 0.6, "rz_m": 1.0},
+    "experiment": {"r_grid_m": 0.2, "sigma": 3.0, "v_cruise_mps": 0.5,
+                   "xc_frac": 0.2, "xm_frac": 0.7, "rz_m": 0.75},
+}  # fmt: skip
+
 
 @dataclass(frozen=True)
 class ConnectivityParams:

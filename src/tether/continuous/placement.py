@@ -26,6 +26,8 @@ def safe_team(
     obstacles: ObstacleIndex | None = None,
     margin_m: float = 1.0,
     height_m: tuple[float, float] | None = None,
+    center_m: list[float] | np.ndarray | None = None,
+    box_margin_m: float = 0.0,
     max_tries: int = 50,
 ) -> np.ndarray:
     """``(n, dim)`` positions with ``lambda2 > lambda2_min`` in ``G_lambda``.
@@ -36,6 +38,10 @@ def safe_team(
         Keep the first robot this far inside the world's bounds.
     height_m
         For 3-D worlds, the range of heights of the first robot.
+    center_m
+        Where the first robot is (default: uniform in the bounds less ``margin_m``).
+    box_margin_m
+        Every robot at least this far inside the bounds (floor and ceiling in 3-D).
     """
     obstacles = obstacles or ObstacleIndex.from_world(world)
     dim = world.dim
@@ -43,8 +49,12 @@ def safe_team(
         world.bounds_m if world.bounds_m is not None else (-np.full(dim, 10.0), np.full(dim, 10.0))
     )
     for _ in range(max_tries):
-        start = rng.uniform(lo + margin_m, hi - margin_m)
-        if dim == 3 and height_m is not None:
+        if center_m is not None:
+            start = np.asarray(center_m, dtype=float).copy()
+        else:
+            inset = np.minimum(margin_m, 0.5 * (hi - lo))  # a thin box keeps its middle
+            start = rng.uniform(lo + inset, hi - inset)
+        if center_m is None and dim == 3 and height_m is not None:
             start[2] = rng.uniform(*height_m)
         pts = [start]
         for _ in range(200 * n):
@@ -57,6 +67,12 @@ def safe_team(
             if np.min(np.linalg.norm(np.asarray(pts) - cand, axis=1)) <= params.rc_outer_m:
                 continue
             if not world.in_bounds(cand[None])[0]:
+                continue
+            if (
+                box_margin_m > 0
+                and world.bounds_m is not None
+                and not (np.all(cand >= lo + box_margin_m) and np.all(cand <= hi - box_margin_m))
+            ):
                 continue
             if obstacles.tree is not None and obstacles.tree.query(cand)[0] <= params.ro_outer_m:
                 continue

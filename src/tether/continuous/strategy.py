@@ -243,8 +243,16 @@ class ConnectivityStrategy(Strategy):
         rng: np.random.Generator,
     ) -> ConnectivityStrategy:
         _check_external(params, initial_state, scenario.source)
+        cls.check_start(params, scenario, world, initial_state)
+        return cls(params)
+
+    @staticmethod
+    def check_start(
+        params: ConnectivityStrategyParams, scenario: Any, world: World, initial: TeamState
+    ) -> None:
+        """One-line ``ScenarioError`` unless the initial weighted graph is in the safe set."""
         conn = params.connectivity()
-        graph = compute_weights(initial_state.positions, conn, ObstacleIndex.from_world(world))
+        graph = compute_weights(initial.positions, conn, ObstacleIndex.from_world(world))
         lam, _ = graph.fiedler()
         if not lam > conn.lambda2_min:
             raise ScenarioError(
@@ -253,7 +261,6 @@ class ConnectivityStrategy(Strategy):
                    if world.has_obstacles and "seed" not in scenario.world.params
                    and scenario.world.scene in ("town", "office") else "")
             )  # fmt: skip
-        return cls(params)
 
     # ----------------------------------------------------------------- lifecycle
 

@@ -32,6 +32,7 @@ import numpy as np
 
 from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
 from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
+from tether.recurrent.planning.deployment import optimal_deployment
 from tether.recurrent.planning.expgraph import FRONTIER, ExplorationGraph, GraphBuilder
 from tether.recurrent.planning.readiness import ReadinessTracker, relay_paths
 
@@ -276,8 +277,6 @@ class RecurrentStrategy:
         row: dict[int, int],
     ) -> tuple[dict[int, int], set[int]]:
         """Sec. V deployment (:func:`tether.recurrent.deployment.optimal_deployment`)."""
-        from tether.recurrent.planning.deployment import optimal_deployment
-
         ready_set = {int(r) for r in ready_ids}
         busy = {int(r): int(goal_v[r]) for r in movable if int(r) not in ready_set}
 

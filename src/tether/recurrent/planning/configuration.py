@@ -49,6 +49,8 @@ from typing import Literal
 import networkx as nx
 
 from tether.recurrent.planning import problem as _problem
+from tether.recurrent.planning.apx import solve_apx
+from tether.recurrent.planning.ilp import solve_ilp
 
 __all__ = ["Configuration", "check_configuration", "optimal_configuration"]
 
@@ -138,8 +140,6 @@ def optimal_configuration(
     t0 = time.perf_counter()
     problem = _problem.build(graph, base, utilities, budget, fixed)
     if method == "apx":
-        from tether.recurrent.planning.apx import solve_apx
-
         if int(delta) != delta or delta < 1:
             raise ValueError(f"delta must be a positive integer (got {delta!r})")
         res = solve_apx(problem, int(delta))
@@ -151,8 +151,6 @@ def optimal_configuration(
             "apx",
         )
     elif method == "ilp":
-        from tether.recurrent.planning.ilp import solve_ilp
-
         res = solve_ilp(problem, backend=backend, time_limit_s=time_limit_s)
         verts, util, proven, upper, name = (
             res.vertices,

@@ -1,0 +1,188 @@
+"""The prime-traveler election by flooding over the message layer (Sec. 3.3).
+
+The host of an election (robot 0 at start-up, then the prime traveler when it
+reaches its target) opens election ``e``; the candidates (secondary travelers;
+at start-up every robot with a target) flood ``(criterion, index)`` and every
+robot keeps the smallest pair it heard (ties to the lower index). After
+``2(N - 1)`` rounds the host decides: the best candidate it heard wins, and the
+result is flooded until it reaches the winner, who becomes the prime traveler.
+Every message goes through :class:`tether.comm.MessageLayer`, so loss, delay and
+failures reach the election too: a lost reply can only make a worse candidate
+win, never two primes.
+
+**At most one prime traveler.** The right to be prime is a single token: it
+starts with the host of the start-up election and moves only from a host to the
+winner of the host's own election. A winner that is no longer a secondary
+traveler when the result reaches it (it reached its target meanwhile) floods a
+*decline* and the token stays with the host, who opens a new election. A host
+whose election found no candidate keeps the token idle and polls again. This
+departs from Algorithm 1 in one place: a connector that receives a target when
+no prime exists becomes a secondary traveler and is elected, instead of making
+itself prime (line 8), because "no prime in the group" cannot be known exactly
+under delays, and two connectors acting on it at once would make two primes.
+
+The state is arrays over robots; a round updates robot ``i`` from its own row
+and its inbox only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tether.comm import MessageLayer
+
+# message fields (columns)
+EPOCH, HOST, BEST, BEST_IDX, RESULT, WINNER, ACK, ACK_CODE = range(8)
+TAKEN, DECLINED = 1.0, 2.0
+
+# what each robot does with the token
+NO_TOKEN, IDLE, ACTIVE, HOSTING, TRANSIT = range(5)
+
+
+@dataclass
+class Outcome:
+    """What happened in one round, for the roles and the event log."""
+
+    decided: list[tuple[int, int, int]] = field(default_factory=list)  # (epoch, host, winner)
+    became_prime: list[int] = field(default_factory=list)
+    declined: list[int] = field(default_factory=list)
+    opened: list[tuple[int, int]] = field(default_factory=list)  # (epoch, host)
+
+
+class Election:
+    """Per-robot election state and one flooding round (see the module docstring).
+
+    Parameters
+    ----------
+    n
+        Team size (known to every robot: it sets the ``2(N - 1)`` rounds).
+    layer
+        The message layer the election talks through.
+    host
+        Robot holding the token at start-up (the paper's robot 1, here index 0).
+    """
+
+    def __init__(self, n: int, layer: MessageLayer, host: int = 0) -> None:
+        self.n = n
+        self.layer = layer
+        self.wait_rounds = 2 * max(n - 1, 1)
+        self.msg = np.zeros((n, 8))
+        self.msg[:, BEST] = np.inf
+        self.msg[:, BEST_IDX] = n  # "nobody"
+        self.msg[:, WINNER] = -1
+        self.token = np.full(n, NO_TOKEN)
+        self.token[host] = IDLE
+        self.opened_round = np.full(n, -1)
+        self.joined = np.zeros(n, dtype=int)  # last epoch robot i put its candidacy in
+        self.handled = np.zeros(n, dtype=int)  # last result epoch robot i acted on
+        self.candidates: dict[int, list[int]] = {}  # epoch -> who joined (for the event log)
+        self.rounds = 0
+
+    def holder(self) -> int:
+        """The robot holding the token (-1 while it travels to a winner)."""
+        held = np.flatnonzero(self.token != NO_TOKEN)
+        return int(held[0]) if len(held) else -1
+
+    def open(self, host: int, out: Outcome) -> None:
+        """``host`` (the token holder) opens a new election."""
+        epoch = int(max(self.msg[:, EPOCH].max(), self.msg[host, EPOCH])) + 1
+        self.msg[host, [EPOCH, HOST, BEST, BEST_IDX]] = (epoch, host, np.inf, self.n)
+        self.token[host] = HOSTING if self.token[host] != ACTIVE else ACTIVE
+        self.opened_round[host] = self.rounds
+        self.candidates[epoch] = []
+        out.opened.append((epoch, host))
+
+    def round(
+        self,
+        pairs: np.ndarray,
+        candidate: np.ndarray,
+        criterion: np.ndarray,
+        secondary: np.ndarray,
+        wants_election: np.ndarray,
+    ) -> Outcome:
+        """One flooding round over ``pairs``.
+
+        Parameters
+        ----------
+        candidate
+            ``(n,)`` robots that may stand in an open election now.
+        criterion
+            ``(n,)`` their criterion (remaining path length ``d_gamma``).
+        secondary
+            ``(n,)`` robots that may take the prime role if they win.
+        wants_election
+            ``(n,)`` the prime asks for its succession (it reached its target).
+        """
+        out = Outcome()
+        m = self.msg
+        # hosts: the idle token holder polls; the active prime opens when it asks to
+        for h in np.flatnonzero(self.token != NO_TOKEN):
+            if self.token[h] == IDLE or (self.token[h] == ACTIVE and wants_election[h]
+                                         and self.opened_round[h] < 0):  # fmt: skip
+                self.open(int(h), out)
+        # candidacy: once per open election, with the criterion at joining time
+        open_epoch = (m[:, EPOCH] > m[:, RESULT]) & (m[:, EPOCH] > 0)
+        join = candidate & open_epoch & (self.joined < m[:, EPOCH])
+        for i in np.flatnonzero(join):
+            if (criterion[i], i) < (m[i, BEST], m[i, BEST_IDX]):
+                m[i, BEST], m[i, BEST_IDX] = criterion[i], i
+            self.joined[i] = int(m[i, EPOCH])
+            self.candidates.setdefault(int(m[i, EPOCH]), []).append(int(i))
+        # flood: every robot merges what its neighbours sent (last values received)
+        inbox = self.layer.exchange(pairs, m)
+        self.rounds += 1
+        ok = inbox.valid
+        recv, vals = inbox.receiver[ok], inbox.values[ok]
+        self._merge(recv, vals)
+        # hosts decide after 2(N - 1) rounds
+        for h in np.flatnonzero((self.token == HOSTING) | (self.token == ACTIVE)):
+            if self.opened_round[h] < 0 or self.rounds - self.opened_round[h] < self.wait_rounds:
+                continue
+            epoch, best = int(m[h, EPOCH]), int(m[h, BEST_IDX])
+            self.opened_round[h] = -1
+            m[h, RESULT], m[h, WINNER] = epoch, (best if best < self.n else -1)
+            out.decided.append((epoch, int(h), int(m[h, WINNER])))
+            self.token[h] = IDLE if best >= self.n else TRANSIT
+        # the winner takes the token or declines it
+        news = (m[:, RESULT] > self.handled) & (m[:, WINNER] == np.arange(self.n))
+        for w in np.flatnonzero(news):
+            self.handled[w] = int(m[w, RESULT])
+            take = bool(secondary[w])
+            m[w, ACK], m[w, ACK_CODE] = m[w, RESULT], TAKEN if take else DECLINED
+            if take:
+                self.token[w] = ACTIVE
+                out.became_prime.append(int(w))
+            else:
+                out.declined.append(int(w))
+        # a host whose token is in transit hears the acknowledgement (its own, if it won)
+        for h in np.flatnonzero(self.token == TRANSIT):
+            if m[h, ACK] > m[h, RESULT]:  # a later election exists: the token was taken
+                self.token[h] = NO_TOKEN
+            elif m[h, ACK] == m[h, RESULT] and m[h, RESULT] > 0:
+                self.token[h] = NO_TOKEN if m[h, ACK_CODE] == TAKEN else IDLE
+        return out
+
+    def _merge(self, recv: np.ndarray, vals: np.ndarray) -> None:
+        """Each robot adopts the newest election, result and acknowledgement it heard."""
+        m = self.msg
+        for field_, take in ((EPOCH, (EPOCH, HOST, BEST, BEST_IDX)), (RESULT, (RESULT, WINNER)),
+                             (ACK, (ACK, ACK_CODE))):  # fmt: skip
+            newest = np.full(self.n, -np.inf)
+            np.maximum.at(newest, recv, vals[:, field_])
+            for i in np.flatnonzero(newest > m[:, field_]):
+                rows = vals[(recv == i) & (vals[:, field_] == newest[i])]
+                m[i, list(take)] = rows[0, list(take)]
+        # the same open election: keep the lexicographically smallest candidate
+        same = vals[:, EPOCH] == m[recv, EPOCH]
+        if not same.any():
+            return
+        r, b, bi = recv[same], vals[same, BEST], vals[same, BEST_IDX]
+        order = np.lexsort((bi, b, r))
+        r, b, bi = r[order], b[order], bi[order]
+        first = np.r_[True, r[1:] != r[:-1]]
+        r, b, bi = r[first], b[first], bi[first]
+        better = (b < m[r, BEST]) | ((b == m[r, BEST]) & (bi < m[r, BEST_IDX]))
+        m[r[better], BEST] = b[better]
+        m[r[better], BEST_IDX] = bi[better]

@@ -1,0 +1,375 @@
+"""Strategy ``multi_target``: decentralized multi-target exploration under continuous connectivity.
+
+The continuous-connectivity paper's own contribution (Secs. 3-4): every robot
+visits its own online list of targets while the weighted graph stays connected
+at every instant. Each control period:
+
+1. message rounds over the links of the weighted graph: the prime-traveler
+   election (:mod:`.election`) and the consensus estimate of the prime's
+   efficiency, eq. (13) (:mod:`.consensus`);
+2. Algorithm 1 (:mod:`.roles`): targets, paths, roles;
+3. eq. (1) integrated with adaptive sub-steps (:mod:`.dynamics`), the traveling
+   force of Algorithm 2 re-evaluated at every sub-step (:func:`traveling_forces`:
+   eqs. (3)-(8), (14)-(15)), the connectivity force of App. A as in the
+   ``connectivity`` strategy, and a guard that keeps anchors within ``Rz``.
+
+Decisions where the paper is silent are listed in ``docs/multi_target.md``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from tether.comm import CommParams, MessageLayer
+from tether.continuous.consensus import EfficiencyConsensus
+from tether.continuous.dynamics import integrate
+from tether.continuous.election import Election
+from tether.continuous.params import TRAVEL_TABLE2
+from tether.continuous.placement import safe_team
+from tether.continuous.reference_filter import ReferenceFilter
+from tether.continuous.roles import ANCHOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
+from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.continuous.targets import TargetBook
+from tether.continuous.travel import (
+    alignment,
+    anchor_force,
+    efficiency,
+    rho,
+    travel_force,
+)
+from tether.errors import ScenarioError
+from tether.registry import STRATEGIES, TARGET_GENERATORS
+from tether.sim import StepContext, TeamState
+from tether.world.world import World
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class TargetsConfig(_Strict):
+    """A target generator by name (``fixed``, ``paper_random``, ``schedule``) and its params."""
+
+    kind: str = "paper_random"
+    params: dict[str, Any] = Field(default_factory=dict)
+
+
+class MessagesConfig(_Strict):
+    """Faults of the message layer the election and the consensus talk through."""
+
+    rounds_per_step: int = Field(default=1, ge=1)
+    loss_probability: float = Field(default=0.0, ge=0, lt=1)
+    delay_rounds: int = Field(default=0, ge=0)
+
+
+class StartConfig(_Strict):
+    """Where the team starts when ``team.init`` is not ``positions``: a safe random team."""
+
+    center_m: list[float] | None = None
+    height_m: list[float] | None = None
+    margin_m: float = Field(default=2.0, ge=0)
+
+
+class MultiTargetParams(ConnectivityStrategyParams):
+    """Parameters of ``multi_target``: Table 2 (``preset``) plus the open choices."""
+
+    targets: TargetsConfig = Field(default_factory=TargetsConfig)
+    r_grid_m: float = Field(default=0.75, gt=0)
+    sigma: float = Field(default=3.0, ge=1)
+    v_cruise_mps: float = Field(default=3.0, gt=0)
+    xc_frac: float = Field(default=0.1, ge=0)
+    xm_frac: float = Field(default=0.6, gt=0)
+    rz_m: float = Field(default=1.8, gt=0)
+    kp_n_per_m: float = Field(default=4.0, gt=0)
+    kv_ns_per_m: float = Field(default=4.0, gt=0)
+    kz_n: float = Field(default=1.0, gt=0)
+    k_lambda_per_s: float = Field(default=5.0, gt=0)
+    alpha_lambda: float = Field(default=0.5, ge=0, le=1)
+    r_gamma_m: float | None = Field(default=None, gt=0, description="default: Rz")
+    inflate_m: float | None = Field(
+        default=None, gt=0, description="planning inflation; default (Ro + R'o) / 2"
+    )
+    stall_timeout_s: float | None = Field(default=60.0, gt=0)
+    max_travel_force_n: float = Field(default=10.0, gt=0)
+    election_criterion: Literal["path_length", "distance"] = "path_length"
+    messages: MessagesConfig = Field(default_factory=MessagesConfig)
+    start: StartConfig = Field(default_factory=StartConfig)
+    reference_filter: bool = False
+
+    @model_validator(mode="before")
+    @classmethod
+    def _apply_travel_preset(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            preset = data.get("preset", "outdoor")
+            if preset in TRAVEL_TABLE2:
+                data = {**TRAVEL_TABLE2[preset], **data}
+        return data
+
+    @model_validator(mode="after")
+    def _bands(self) -> MultiTargetParams:
+        if not self.xc_frac < self.xm_frac:
+            raise ValueError("need xc_frac < xm_frac (the efficiency band of eq. (9))")
+        return self
+
+
+def traveling_forces(
+    q: np.ndarray,
+    v: np.ndarray,
+    f_lambda: np.ndarray,
+    planner: RolePlanner,
+    lambda_hat: np.ndarray,
+    p: MultiTargetParams,
+) -> np.ndarray:
+    """``f_i`` of Algorithm 2 for every robot, ``(n, dim)``.
+
+    Connectors 0; the prime ``f_travel`` (eq. (3)); secondaries
+    ``rho(Theta(f_lambda_i, f_travel_i), Lambda_hat_i, sigma) f_travel`` (eqs.
+    (4), (8), (14), (15)); anchors ``f_anchor`` (eq. (7)). Robot ``i``'s row
+    uses only its own state, path and target, ``f_lambda_i`` and ``Lambda_hat_i``.
+    """
+    f = np.zeros_like(q)
+    role = planner.role
+    trav, paths = planner.path_set()  # the travelers: prime and secondaries on their way
+    if len(trav):
+        ps = paths.states(q[trav], p.v_cruise_mps)
+        ft = travel_force(q[trav], v[trav], ps, kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
+                          mass_kg=p.mass_kg, damping_ns_per_m=p.damping_ns_per_m,
+                          max_force_n=p.max_travel_force_n)  # fmt: skip
+        sec = role[trav] == SECONDARY
+        scale = np.ones(len(trav))
+        scale[sec] = rho(alignment(f_lambda[trav[sec]], ft[sec]), lambda_hat[trav[sec]], p.sigma)
+        f[trav] = scale[:, None] * ft
+    held = np.flatnonzero(planner.anchored())
+    if len(held):
+        f[held] = anchor_force(q[held], planner.targets_of(held), p.rz_m, p.kz_n)
+    return f
+
+
+@STRATEGIES.register("multi_target")
+class MultiTargetStrategy(ConnectivityStrategy):
+    """Decentralized multi-target exploration (Algorithms 1-2) on the connectivity force."""
+
+    name = "multi_target"
+    Params = MultiTargetParams
+
+    def __init__(self, params: MultiTargetParams, book: TargetBook) -> None:
+        super().__init__(params)
+        self.params: MultiTargetParams = params
+        self.targets = book
+
+    @classmethod
+    def initial_state(
+        cls, params: MultiTargetParams, scenario: Any, world: World, rng: np.random.Generator
+    ) -> TeamState | None:
+        """A random safe team (``start``) unless ``team.init`` gives positions."""
+        if scenario.team.init.kind == "positions":
+            return None
+        s = params.start
+        try:
+            q = safe_team(world, scenario.team.n_robots, params.connectivity(), rng,
+                          margin_m=s.margin_m, center_m=s.center_m,
+                          box_margin_m=params.ro_m,
+                          height_m=tuple(s.height_m) if s.height_m else None)  # fmt: skip
+        except ValueError as exc:
+            raise ScenarioError(f"{scenario.source}: strategy.params.start: {exc}") from None
+        return TeamState.at_rest(q)
+
+    @classmethod
+    def from_scenario(
+        cls,
+        params: MultiTargetParams,
+        scenario: Any,
+        world: World,
+        initial: TeamState,
+        rng: np.random.Generator,
+    ) -> MultiTargetStrategy:
+        cls.check_start(params, scenario, world, initial)
+        field = "strategy.params.targets"
+        if params.targets.kind not in TARGET_GENERATORS:
+            raise ScenarioError(
+                f"{scenario.source}: {field}.kind: unknown target generator "
+                f"{params.targets.kind!r}; expected one of: {', '.join(TARGET_GENERATORS.names())}"
+            )
+        gen = TARGET_GENERATORS.get(params.targets.kind)
+        gp = dict(params.targets.params)
+        if params.targets.kind == "paper_random" and gp.get("config_seed") is None:
+            gp["config_seed"] = int(scenario.seed)  # the run seed is the configuration
+        try:
+            book = TargetBook.empty(initial.n)
+            gen.fill(gen.Params.model_validate(gp), book, world, rng)
+        except ValueError as exc:
+            raise ScenarioError(f"{scenario.source}: {field}.params: {exc}") from None
+        for robot, queue in enumerate(book.queues):
+            for z in queue:
+                if len(z.position_m) != world.dim or not world.points_free(z.position_m[None])[0]:
+                    raise ScenarioError(
+                        f"{scenario.source}: {field}: target {z.id} of robot {robot} at "
+                        f"{z.position_m.tolist()} is not a free point of the {world.dim}-D world"
+                    )
+        return cls(params, book)
+
+    # -- lifecycle ---------------------------------------------------------------------
+    def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
+        super().reset(world, state, rng)
+        p, n = self.params, state.n
+        comm = CommParams(p.messages.loss_probability, p.messages.delay_rounds)
+        self.election = Election(n, MessageLayer(n, comm, rng))
+        self.consensus = EfficiencyConsensus(n, MessageLayer(n, comm, rng), p.k_lambda_per_s)
+        self.planner = RolePlanner(
+            world, self.targets, r_grid_m=p.r_grid_m, rz_m=p.rz_m,
+            inflate_m=p.inflate_m or 0.5 * (p.ro_m + p.ro_outer_m),
+            r_gamma_m=p.r_gamma_m or p.rz_m, stall_timeout_s=p.stall_timeout_s, emit=self.emit,
+        )  # fmt: skip
+        self.planner.start_up(state.positions)
+        self.filter: ReferenceFilter | None = None  # made at the first step (it needs dt)
+        self._t_s = 0.0
+        self._completion: float | None = 0.0 if self.planner.done() else None
+        self._travelled = np.zeros(n)
+        self._stretch = 0.0
+        self._lambda_sum, self._lambda_count = 0.0, 0
+        self._max_primes = 0
+        self._elections = 0
+        self._filter_dev = 0.0
+        self._prime_eff = 1.0
+        self._current = self._evaluate(state.positions)
+
+    def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
+        lam, cache = super()._evaluate(q)
+        held = np.flatnonzero(self.planner.anchored())
+        if len(held) and np.any(np.linalg.norm(q[held] - self.planner.targets_of(held), axis=1)
+                                >= self.params.rz_m):  # fmt: skip
+            return -np.inf, cache  # an anchor would leave its ball: reject the sub-step
+        return lam, cache
+
+    # -- one control period ------------------------------------------------------------
+    def _links(self) -> np.ndarray:
+        graph = self._current[1][0]
+        return graph.pairs[graph.pair_factor > 0]
+
+    def _communicate(self, q: np.ndarray, v: np.ndarray, t_s: float, dt_s: float) -> None:
+        p, pl = self.params, self.planner
+        wants = pl.update(q, t_s)
+        robots, paths = pl.path_set()
+        states = paths.states(q[robots], p.v_cruise_mps)
+        if p.election_criterion == "path_length":
+            crit = np.full(len(q), np.inf)
+            crit[robots] = states.remaining_m
+        else:
+            crit = pl.distance_to_target(q)
+        links = self._links()
+        rounds = p.messages.rounds_per_step
+        for _ in range(rounds):
+            out = self.election.round(links, pl.role == SECONDARY, crit, pl.role == SECONDARY,
+                                      wants)  # fmt: skip
+            for epoch, host in out.opened:
+                self.emit("election_open", host, t_s=t_s, epoch=epoch)
+            for epoch, host, winner in out.decided:
+                self._elections += 1
+                self.emit("election", host, t_s=t_s, epoch=epoch, winner=winner,
+                          candidates=self.election.candidates.get(epoch, []))  # fmt: skip
+                pl.abdicate(host, t_s)
+            for w in out.became_prime:
+                pl.set_role(w, PRIME, t_s)
+            for w in out.declined:
+                self.emit("election_declined", w, t_s=t_s)
+        prime = int(np.flatnonzero(pl.role == PRIME)[0]) if (pl.role == PRIME).any() else -1
+        self._prime_eff = 1.0  # a prime at its target (no path) tracks perfectly
+        where = np.flatnonzero(robots == prime)
+        if len(where):  # eqs. (11)-(12)
+            k = int(where[0])
+            err = (1 - p.alpha_lambda) * np.linalg.norm(states.velocity_mps[k] - v[prime]) \
+                + p.alpha_lambda * states.distance_m[k]  # fmt: skip
+            band = (p.xc_frac * p.v_cruise_mps, p.xm_frac * p.v_cruise_mps)
+            self._prime_eff = float(efficiency(np.array([err]), *band)[0])
+        for _ in range(rounds):
+            self.consensus.round(links, dt_s / rounds, prime, self._prime_eff)
+
+    def step(self, ctx: StepContext) -> TeamState:
+        self._step = ctx.step
+        q, v = ctx.state.positions, ctx.state.velocities
+        self._communicate(q, v, ctx.t_s, ctx.dt_s)
+
+        def external(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray) -> np.ndarray:
+            return traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate,
+                                    self.params)  # fmt: skip
+
+        q_new, v_new, ev, stats = integrate(
+            q, v, ctx.dt_s, self._evaluate, self._force, external, self.integ,
+            self.conn.lambda2_min, self._current, box=self.world.bounds_m,
+            box_margin_m=self.conn.ro_m,
+        )  # fmt: skip
+        self._current = ev
+        self._stats["substeps"] += stats.substeps
+        self._stats["rejections"] += stats.rejections
+        self._stats["stalls"] += int(stats.stalled)
+        graph, lam, nu = ev[1]
+        self._observe(q_new, graph, lam, nu)
+        self._bookkeep(q, q_new, float(lam), (ctx.step + 1) * ctx.dt_s, ctx.dt_s)
+        return TeamState(q_new, v_new)
+
+    def _bookkeep(self, q: np.ndarray, q_new: np.ndarray, lam: float, t_s: float, dt: float):
+        pl = self.planner
+        self._travelled += np.linalg.norm(q_new - q, axis=1)
+        ex = np.flatnonzero(pl.explorer)
+        if len(ex) > 1:
+            d = np.linalg.norm(q_new[ex, None] - q_new[None, ex], axis=-1)
+            self._stretch = max(self._stretch, float(d.max()))
+        if np.isfinite(lam):
+            self._lambda_sum += lam
+            self._lambda_count += 1
+        self._max_primes = max(self._max_primes, int((pl.role == PRIME).sum()))
+        if self.params.reference_filter:
+            if self.filter is None:
+                self.filter = ReferenceFilter(q, dt)
+            dev = np.linalg.norm(self.filter.update(q_new) - q_new, axis=1)
+            self._filter_dev = max(self._filter_dev, float(dev.max()))
+        self._t_s = t_s
+        if self._completion is None and pl.done():
+            self._completion = t_s
+
+    def add_target(self, robot: int, position_m: Any, stay_s: float = 3.0, **kw: Any) -> None:
+        """Give ``robot`` one more target while the team runs (Python API)."""
+        self.targets.add(robot, position_m, stay_s, **kw)
+        self._completion = None
+
+    def done(self) -> bool:
+        return self._completion is not None
+
+    # -- results ---------------------------------------------------------------------
+    def step_values(self) -> dict[str, Any]:
+        role = self.planner.role
+        return {
+            "lambda2_weighted": float(self._current[0]) if self._current else float("nan"),
+            "prime": int(np.flatnonzero(role == PRIME)[0]) if (role == PRIME).any() else -1,
+            "n_travelers": int(((role == PRIME) | (role == SECONDARY)).sum()),
+            "n_anchors": int((role == ANCHOR).sum()),
+            "prime_efficiency": self._prime_eff,
+        }
+
+    def robot_values(self) -> dict[str, np.ndarray]:
+        out = {"role": np.array([ROLE_NAMES[r] for r in self.planner.role])}
+        if self.filter is not None:  # the reference of eq. (16), from step 1 on
+            for d, axis in zip(range(self.filter.position.shape[1]), "xyz", strict=False):
+                out[f"{axis}_ref_m"] = self.filter.position[:, d].copy()
+        return out
+
+    def metrics(self) -> dict[str, Any]:
+        pl = self.planner
+        ex = pl.explorer
+        out = {
+            **super().metrics(),
+            **pl.summary(),
+            "completion_time_s": self._completion,
+            "explorers": int(ex.sum()),
+            "mean_explorer_distance_m": float(self._travelled[ex].mean()) if ex.any() else 0.0,
+            "max_explorer_stretch_m": self._stretch,
+            "mean_lambda2_weighted": self._lambda_sum / max(self._lambda_count, 1),
+            "elections": self._elections,
+            "max_simultaneous_primes": self._max_primes,
+        }
+        if self.filter is not None:
+            out["reference_filter_max_deviation_m"] = self._filter_dev
+        return out
