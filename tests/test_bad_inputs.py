@@ -538,6 +538,11 @@ COMMAND_LINES: dict[str, tuple[tuple[str, ...], str]] = {
         "--address",
     ),
     "sweep too many trials": (("sweep", "silent_paper", "--seeds", "10000000"), "sweep"),
+    "animate a missing run folder": (("animate", "nowhere"), "nowhere: not a run folder"),
+    "animate --stride 0": (("animate", "nowhere", "--stride", "0"), "--stride"),
+    "animate --width 0": (("animate", "nowhere", "--width", "0"), "--width"),
+    "view --port -5": (("view", "nowhere", "--serve", "--port", "-5"), "--port"),
+    "export a missing run folder": (("export", "nowhere"), "nowhere"),
 }
 
 

@@ -190,8 +190,8 @@ def animate(
     fmt: Annotated[str | None, typer.Option("--format", help="gif or mp4 (ffmpeg).")] = None,
     fps: Annotated[float, typer.Option(help="Frames per second.")] = 10.0,
     duration: Annotated[float | None, typer.Option(help="Longest length (s); default 20.")] = None,
-    stride: Annotated[int | None, typer.Option(help="Every N-th recorded step.")] = None,
-    width: Annotated[int, typer.Option(help="Width in pixels.")] = 720,
+    stride: Annotated[int | None, typer.Option(min=1, help="Every N-th recorded step.")] = None,
+    width: Annotated[int, typer.Option(min=64, max=8192, help="Width in pixels.")] = 720,
 ) -> None:
     """Animate a run folder (GIF, or MP4 where ffmpeg exists), e.g. tether animate runs/x"""
     from tether.viz.commands import animate_command
@@ -214,7 +214,9 @@ def view(
     out_file: Annotated[Path | None, typer.Option("--out", "-o", help="HTML file.")] = None,
     max_mb: Annotated[float, typer.Option(help="Size budget; long runs are thinned.")] = 8.0,
     serve: Annotated[bool, typer.Option(help="Also serve it on 127.0.0.1.")] = False,
-    port: Annotated[int, typer.Option(help="Port for --serve (0: any free one).")] = 8000,
+    port: Annotated[
+        int, typer.Option(min=0, max=65535, help="Port for --serve (0: any free one).")
+    ] = 8000,
 ) -> None:
     """Write a self-contained, offline HTML 3-D replay of a run folder."""
     from tether.viz.commands import view_command
