@@ -668,6 +668,24 @@ def test_a_failed_run_leaves_no_folder(tmp_path, capsys, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_full_disk_is_one_line_and_leaves_nothing(tmp_path, capsys, monkeypatch):
+    import errno
+
+    from tether import runfolder
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(runfolder, "write_table", full)
+    data = silent(tmp_path)
+    data["sim"]["max_steps"] = 3
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
+    code, _, err = tether(capsys, "run", "s.yaml", "--out", "out/run", "--no-figures")
+    assert_one_line(code, err, "out/run: cannot write the run folder (No space left on device)")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
+
+
 def test_internal_error_keeps_exit_1_and_traceback_on_request(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     from tether.silent.strategy import SilentStrategy

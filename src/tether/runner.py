@@ -379,6 +379,10 @@ def run(
             recorder=recorder,
         )
         wall = time.perf_counter() - start
+    except BaseException:
+        folder.abort()
+        raise
+    try:
         folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
         folder.write_table("steps.parquet", recorder.step_columns())
         folder.write_table("robots.parquet", recorder.robot_columns())
@@ -389,10 +393,8 @@ def run(
                 folder.save_figure(fig, name)
         summary = summarize(scenario, seed, result, wall)
         folder.commit(summary)
-    except OSError as exc:  # writing the run folder failed (disk full, removed, ...)
+    except OSError as exc:  # the disk filled up, the folder was removed, ...
         folder.abort()
-        if not str(getattr(exc, "filename", "") or "").startswith(str(folder.path.parent)):
-            raise
         raise OutputError(
             f"{path}: cannot write the run folder ({exc.strerror or exc}); choose another --out"
         ) from None

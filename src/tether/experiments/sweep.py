@@ -18,7 +18,14 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 
-from tether.config import MAX_SWEEP_TRIALS, Scenario, scenario_from_dict, set_dotted, sweep_label
+from tether.config import (
+    MAX_SEED,
+    MAX_SWEEP_TRIALS,
+    Scenario,
+    scenario_from_dict,
+    set_dotted,
+    sweep_label,
+)
 from tether.errors import OutputError, TetherError
 from tether.experiments.executors import Trial, TrialOutcome, check_executor, execute
 from tether.runfolder import is_run_folder, save_figure, write_rows, write_yaml
@@ -81,6 +88,11 @@ def trials_of(
         raise TetherError(
             f"{scenario.source}: sweep: {n_combos:,} combinations x {seeds:,} seeds = "
             f"{n_combos * seeds:,} trials; at most {MAX_SWEEP_TRIALS:,} (use fewer seeds or values)"
+        )
+    if scenario.seed + seeds - 1 > MAX_SEED:
+        raise TetherError(
+            f"{scenario.source}: seed: {scenario.seed} + {seeds} seeds passes 2**63 - 1; "
+            "use a smaller seed"
         )
     out = Path(out_dir)
     trials = []
