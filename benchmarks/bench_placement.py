@@ -5,9 +5,10 @@ The silent demo's setting (free 2-D space, ``spacing_m = 8``, ``min_separation_m
 candidates against a k-d tree, full anchors retired) is timed at every size; the
 old one-robot-at-a-time placement (tests/_placement_reference.py, every
 candidate against every robot) only up to ``--old-up-to`` robots, since it grows
-as n^2.6 (1,000 robots 2 s, 10,000 robots 13 min on the machine of the
-recorded results). Each placement is checked: connected disc graph of radius
-``spacing_m``, robots at least ``min_separation_m`` apart.
+as about n^2.5 (results/placement.json, on a 2-core machine shared with other
+work: old 4 s for 1,000 robots and 19 min for 10,000; new 0.3 s, 1.2 s and 20 s
+for 1,000, 10,000 and 100,000). Each placement is checked: connected disc graph
+of radius ``spacing_m``, robots at least ``min_separation_m`` apart.
 
 Usage: python benchmarks/bench_placement.py [--sizes 1000 10000 100000] [--old-up-to 3000]
        [--out benchmarks/results/placement.json]
