@@ -98,10 +98,16 @@ def test_a_failing_trial_keeps_the_others(tmp_path):
         run_sweep(scenario, tmp_path, seeds=2, executor="processes", workers=2)
     assert "sweep.parquet" in str(err.value)
     rows = pq.read_table(tmp_path / "sweep.parquet").to_pylist()
-    assert sorted(r["param:sensing.range_m"] for r in rows) == [15.0, 15.0]
-    for r in rows:
+    finished = [r for r in rows if r["error"] is None]
+    assert sorted(r["param:sensing.range_m"] for r in finished) == [15.0, 15.0]
+    for r in finished:
         summary = json.loads((Path(r["run_dir"]) / "summary.json").read_text())
         assert summary["connected_all_steps"] is True
+    # the failed trials are in the table too, with their seed and error, and no folder
+    failed = [r for r in rows if r["error"] is not None]
+    assert sorted((r["param:sensing.range_m"], r["seed"]) for r in failed) == [(3.0, 1), (3.0, 2)]
+    assert all("not connected" in r["error"] for r in failed)
+    assert not any(Path(r["run_dir"]).exists() for r in failed)
 
 
 def test_cli_sweep_with_processes(tmp_path):

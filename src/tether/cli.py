@@ -14,6 +14,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from tether.config import MAX_SEED
 from tether.errors import TetherError
 
 app = typer.Typer(
@@ -50,7 +51,9 @@ def run(
     out_dir: Annotated[
         Path | None, typer.Option("--out", "-o", help="Run folder (default: runs/<name>-...)")
     ] = None,
-    seed: Annotated[int | None, typer.Option(help="Override the scenario's seed.")] = None,
+    seed: Annotated[
+        int | None, typer.Option(min=0, max=MAX_SEED, help="Override the scenario's seed.")
+    ] = None,
     set_: SetOpt = None,
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
     animate_: Annotated[bool, typer.Option("--animate", help="Then `tether animate` it.")] = False,
@@ -63,7 +66,11 @@ def run(
     from tether.runner import run as run_scenario
 
     sc = _load(scenario, set_)
-    out.print(f"running [bold]{sc.name}[/] ({sc.strategy.name}, {sc.team.n_robots} robots) ...")
+    out.print(
+        f"running {sc.name} ({sc.strategy.name}, {sc.team.n_robots} robots) ...",
+        markup=False,
+        highlight=False,
+    )
     outcome = run_scenario(sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None)
     s = outcome.summary
     keys = [
@@ -86,8 +93,9 @@ def run(
     for k in keys:
         if k in s:
             v = s[k]
-            out.print(f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}")
-    out.print(f"results: [bold]{outcome.path}[/]")
+            line = f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}"
+            out.print(line, markup=False, highlight=False)
+    out.print(f"results: {outcome.path}", markup=False, highlight=False, soft_wrap=True)
     if animate_:
         animate(outcome.path)
     if view_:
@@ -100,12 +108,13 @@ def sweep(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Sweep folder.")] = Path(
         "runs/sweep"
     ),
-    seeds: Annotated[int, typer.Option(help="Seeds per parameter combination.")] = 1,
+    seeds: Annotated[int, typer.Option(min=1, help="Seeds per parameter combination.")] = 1,
     executor: Annotated[
         str, typer.Option(help="Where trials run: serial, processes or dask.")
     ] = "serial",
     workers: Annotated[
-        int | None, typer.Option(help="Processes (processes, local dask); default: all cores.")
+        int | None,
+        typer.Option(min=1, help="Processes (processes, local dask); default: all cores."),
     ] = None,
     address: Annotated[
         str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
@@ -127,21 +136,35 @@ def sweep(
         executor=executor,
         workers=workers,
         address=address,
-        progress=lambda m: out.print(m),
+        progress=lambda m: out.print(m, markup=False, highlight=False, soft_wrap=True),
     )
-    out.print(f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}")
+    out.print(
+        f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}",
+        markup=False,
+        highlight=False,
+    )
     for fig in result.figures:
-        out.print(f"figure: {fig}")
+        out.print(f"figure: {fig}", markup=False, highlight=False)
 
 
 @app.command()
 def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
-    """Check a scenario (schema, strategy parameters, map, initial connectivity) without running."""
+    """Check a scenario (schema, strategy parameters, map, initial team, memory) without running.
+
+    Runs exactly the checks `tether run` runs before simulating (tether.runner.build),
+    so a scenario that validates is one that runs.
+    """
+    from tether.runfolder import check_writable
     from tether.runner import build
 
     sc = _load(scenario, set_)
-    build(sc)  # exactly the checks `run` makes before it simulates
-    out.print(f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)")
+    build(sc)
+    check_writable(sc.output.dir)  # where `tether run` would write (without --out)
+    out.print(
+        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)",
+        markup=False,
+        highlight=False,
+    )
 
 
 @app.command("list")
@@ -151,10 +174,10 @@ def list_() -> None:
     from tether.plugins import load_builtins
 
     names = load_builtins()
-    out.print("scenarios:   " + ", ".join(builtin_scenarios()))
-    out.print("strategies:  " + ", ".join(names["strategies"]))
-    out.print("scenes:      " + ", ".join(names["scenes"]))
-    out.print("link models: " + ", ".join(names["link models"]))
+    out.print("scenarios:   " + ", ".join(builtin_scenarios()), markup=False)
+    out.print("strategies:  " + ", ".join(names["strategies"]), markup=False)
+    out.print("scenes:      " + ", ".join(names["scenes"]), markup=False)
+    out.print("link models: " + ", ".join(names["link models"]), markup=False)
 
 
 RunDirArg = Annotated[Path, typer.Argument(help="A run folder written by `tether run`.")]
@@ -167,8 +190,8 @@ def animate(
     fmt: Annotated[str | None, typer.Option("--format", help="gif or mp4 (ffmpeg).")] = None,
     fps: Annotated[float, typer.Option(help="Frames per second.")] = 10.0,
     duration: Annotated[float | None, typer.Option(help="Longest length (s); default 20.")] = None,
-    stride: Annotated[int | None, typer.Option(help="Every N-th recorded step.")] = None,
-    width: Annotated[int, typer.Option(help="Width in pixels.")] = 720,
+    stride: Annotated[int | None, typer.Option(min=1, help="Every N-th recorded step.")] = None,
+    width: Annotated[int, typer.Option(min=64, max=8192, help="Width in pixels.")] = 720,
 ) -> None:
     """Animate a run folder (GIF, or MP4 where ffmpeg exists), e.g. tether animate runs/x"""
     from tether.viz.commands import animate_command
@@ -191,7 +214,9 @@ def view(
     out_file: Annotated[Path | None, typer.Option("--out", "-o", help="HTML file.")] = None,
     max_mb: Annotated[float, typer.Option(help="Size budget; long runs are thinned.")] = 8.0,
     serve: Annotated[bool, typer.Option(help="Also serve it on 127.0.0.1.")] = False,
-    port: Annotated[int, typer.Option(help="Port for --serve (0: any free one).")] = 8000,
+    port: Annotated[
+        int, typer.Option(min=0, max=65535, help="Port for --serve (0: any free one).")
+    ] = 8000,
 ) -> None:
     """Write a self-contained, offline HTML 3-D replay of a run folder."""
     from tether.viz.commands import view_command
@@ -211,28 +236,61 @@ def export_(
     export_command(run_dir, out_path, fmt=fmt, say=out.print)
 
 
-def main() -> None:
-    """Entry point: run the app, turning user errors into one line on stderr."""
+def _usage_error_class() -> type[Exception]:
+    """The click exception class behind typer's usage errors, found without importing click.
+
+    typer bundles its own copy of click (``typer._click``) in recent versions and
+    depends on ``click`` in older ones; ``typer.BadParameter`` is public in both,
+    and its bases include the ``ClickException`` every usage error derives from.
+    """
+    for cls in typer.BadParameter.__mro__:
+        if cls.__name__ == "ClickException":
+            return cls
+    return typer.BadParameter  # pragma: no cover (every typer so far has one)
+
+
+def _usage_line(exc: Exception) -> str:
+    """``error: <what> (see `tether <command> --help`)`` for a usage error."""
+    message = " ".join(str(exc.format_message()).split())  # type: ignore[attr-defined]
+    ctx = getattr(exc, "ctx", None)
+    command = getattr(ctx, "command_path", None) or "tether"
+    if not command.startswith("tether"):
+        command = "tether " + command.split(" ", 1)[-1] if " " in command else "tether"
+    return f"error: {message} (see `{command} --help`)"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: run the app, turning user errors into one line on stderr.
+
+    Exit codes: 0 success, 2 bad input (one ``error:`` line naming the file or
+    option, the field and the fix; usage errors too), 1 an internal error (one
+    line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted.
+    """
     try:
-        app(standalone_mode=False)
+        app(args=argv, prog_name="tether", standalone_mode=False)
     except TetherError as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)
     except (typer.Exit, SystemExit) as exc:
         code = getattr(exc, "exit_code", getattr(exc, "code", 0))
         sys.exit(code or 0)
-    except typer.Abort:
+    except (typer.Abort, KeyboardInterrupt):
+        err.print("aborted", highlight=False, markup=False)
         sys.exit(130)
-    except Exception as exc:  # click usage errors and anything unexpected
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            sys.exit(exc.exit_code)
+    except Exception as exc:  # usage errors, and anything unexpected
+        if isinstance(exc, _usage_error_class()):
+            err.print(_usage_line(exc), highlight=False, markup=False, soft_wrap=True)
+            sys.exit(2)
+        if type(exc).__name__ == "Abort":  # click's own Abort (Ctrl-C at a prompt)
+            sys.exit(130)
         if os.environ.get("TETHER_DEBUG"):
+            details = getattr(exc, "details", None)  # e.g. the traceback of a failed trial
+            if details:
+                print(details, file=sys.stderr)
             raise
+        message = " ".join(str(exc).split())
         err.print(
-            f"error: internal error {type(exc).__name__}: {exc} "
+            f"error: internal error {type(exc).__name__}: {message} "
             "(set TETHER_DEBUG=1 for the traceback and please report it)",
             highlight=False,
             markup=False,

@@ -9,21 +9,56 @@ reported as a :class:`tether.errors.ScenarioError` whose message is one line:
 
 from __future__ import annotations
 
+import hashlib
 import math
 from importlib import resources
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from tether.errors import ScenarioError
 
 BUILTIN_PACKAGE = "tether.scenarios"
 
+#: the largest length or coordinate a scenario may give, in metres (10,000 km): far
+#: beyond any robot team, small enough that squares and sums of lengths stay finite
+MAX_LENGTH_M = 1e7
+#: the longest a simulation step may be, in seconds (a day)
+MAX_DT_S = 86_400.0
+#: limits that keep a scenario bounded in time and memory before anything runs
+MAX_ROBOTS = 1_000_000
+MAX_STEPS = 100_000_000
+MAX_SEED = 2**63 - 1
+#: a sweep grid holds at most this many combinations, a sweep at most this many trials
+MAX_SWEEP_COMBINATIONS = 10_000
+MAX_SWEEP_TRIALS = 100_000
+#: a run folder name part longer than this (bytes) is shortened and given a hash
+MAX_LABEL_BYTES = 80
+#: a scenario file larger than this is refused before it is parsed
+MAX_SCENARIO_BYTES = 16 * 2**20
+#: YAML aliases may repeat values, but the expanded document holds at most this many
+MAX_YAML_VALUES = 1_000_000
+
+#: a coordinate in metres (finite, within +-MAX_LENGTH_M)
+Coordinate = Annotated[float, Field(ge=-MAX_LENGTH_M, le=MAX_LENGTH_M, allow_inf_nan=False)]
+
+
+def finite_strict(**extra: Any) -> ConfigDict:
+    """The model config of every scenario model: unknown keys refused, floats finite."""
+    return ConfigDict(extra="forbid", allow_inf_nan=False, **extra)
+
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = finite_strict(validate_assignment=True)
 
 
 class WorldConfig(_Strict):
@@ -37,10 +72,10 @@ class WorldConfig(_Strict):
 class SensingConfig(_Strict):
     """Sensing model (see :mod:`tether.sensing`)."""
 
-    range_m: float = Field(gt=0)
-    body_radius_m: float = Field(default=0.0, ge=0)
+    range_m: float = Field(gt=0, le=MAX_LENGTH_M)
+    body_radius_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
     occlusion: bool = True
-    radial_error_m: float = Field(default=0.0, ge=0)
+    radial_error_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
     angular_error_deg: float = Field(default=0.0, ge=0, lt=90)
     noise: Literal["none", "uniform", "bound"] = "uniform"
 
@@ -67,27 +102,27 @@ class InitConfig(_Strict):
     """
 
     kind: Literal["random_connected", "uniform", "grid", "positions"] = "random_connected"
-    spacing_m: float = Field(default=5.0, gt=0)
-    min_separation_m: float = Field(default=1.0, ge=0)
-    center: list[float] | None = None
-    extent_m: list[float] | None = None
-    positions: list[list[float]] | None = None
+    spacing_m: float = Field(default=5.0, gt=0, le=MAX_LENGTH_M)
+    min_separation_m: float = Field(default=1.0, ge=0, le=MAX_LENGTH_M)
+    center: list[Coordinate] | None = None
+    extent_m: list[Annotated[float, Field(gt=0, le=MAX_LENGTH_M)]] | None = None
+    positions: list[list[Coordinate]] | None = None
 
 
 class TeamConfig(_Strict):
-    n_robots: int = Field(gt=0)
+    n_robots: int = Field(gt=0, le=MAX_ROBOTS)
     init: InitConfig = Field(default_factory=InitConfig)
 
 
 class SimConfig(_Strict):
-    dt_s: float = Field(default=1.0, gt=0)
-    max_steps: int = Field(default=500, gt=0)
-    collision_distance_m: float = Field(default=0.0, ge=0)
+    dt_s: float = Field(default=1.0, gt=0, le=MAX_DT_S)
+    max_steps: int = Field(default=500, gt=0, le=MAX_STEPS)
+    collision_distance_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
 
 
 class OutputConfig(_Strict):
     dir: str = "runs"
-    record_every: int = Field(default=1, gt=0)
+    record_every: int = Field(default=1, gt=0, le=MAX_STEPS)
     figures: bool = True
 
 
@@ -99,19 +134,30 @@ class StrategyConfig(_Strict):
 class Scenario(_Strict):
     """A complete, validated scenario."""
 
-    name: str = "scenario"
+    name: str = Field(default="scenario", min_length=1, max_length=100)
     description: str = ""
-    seed: int = 0
+    seed: int = Field(default=0, ge=0, le=MAX_SEED)
     world: WorldConfig = Field(default_factory=WorldConfig)
     team: TeamConfig
     sensing: SensingConfig
     sim: SimConfig = Field(default_factory=SimConfig)
     strategy: StrategyConfig
     output: OutputConfig = Field(default_factory=OutputConfig)
-    sweep: dict[str, list[Any]] = Field(
-        default_factory=dict,
-        description="dotted scenario key -> values, run by `tether sweep` (grid of all values)",
+    sweep: dict[Annotated[str, Field(min_length=1)], Annotated[list[Any], Field(min_length=1)]] = (
+        Field(
+            default_factory=dict,
+            description="dotted scenario key -> values, run by `tether sweep` (grid of all values)",
+        )
     )
+
+    @field_validator("name")
+    @classmethod
+    def _name_is_a_file_name(cls, value: str) -> str:
+        if any(c in value for c in "/\\\x00") or value in (".", ".."):
+            raise ValueError(
+                "must not contain '/' or '\\' (it names the run folder); use e.g. 'a-b'"
+            )
+        return value
 
     # Where the scenario came from (for error messages and relative paths); not a YAML key.
     _source: str = "<scenario>"
@@ -159,11 +205,38 @@ def format_validation_error(source: str, err: ValidationError, prefix: str = "")
     elif kind == "missing":
         msg = "required field is missing"
     else:
-        msg = first["msg"]
+        msg = str(first["msg"]).removeprefix("Value error, ")
         if "input" in first and not isinstance(first["input"], dict | list):
-            msg += f" (got {first['input']!r})"
+            got = repr(first["input"])
+            msg += f" (got {got if len(got) <= 60 else got[:57] + '...'})"
     more = f" (+{len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
-    return f"{source}: {loc}: {msg}{more}"
+    return " ".join(f"{source}: {loc}: {msg}{more}".split())
+
+
+def _label_part(key: str, value: Any) -> str:
+    leaf = key.rsplit(".", 1)[-1]
+    part = f"{leaf}={value}"
+    safe = "".join(c if c.isprintable() and c not in "/\\" else "_" for c in part)
+    if safe == part and len(part.encode()) <= MAX_LABEL_BYTES and not part.startswith("."):
+        return part
+    digest = hashlib.sha1(repr(value).encode()).hexdigest()[:10]
+    head = safe[:40].rstrip()
+    return f"{head}~{digest}"
+
+
+def sweep_label(combo: dict[str, Any]) -> str:
+    """The run-folder name of one sweep combination: ``d0_m=5.0,gamma=0.2`` (``base`` if none).
+
+    A value that would make an unsafe or too long file name (a path, a
+    100-point waypoint list) is shortened to its first characters and a hash of
+    its exact value, so every combination keeps its own folder.
+    """
+    if not combo:
+        return "base"
+    label = ",".join(_label_part(k, v) for k, v in combo.items())
+    if len(label.encode()) > 200:
+        label = f"{label[:100]}~{hashlib.sha1(label.encode()).hexdigest()[:10]}"
+    return label
 
 
 def builtin_scenarios() -> list[str]:
@@ -172,23 +245,108 @@ def builtin_scenarios() -> list[str]:
     return sorted(f.name[:-5] for f in files if f.name.endswith(".yaml"))
 
 
-def _read_yaml(path: Path, label: str) -> dict[str, Any]:
+def _yaml_problem(exc: yaml.YAMLError) -> str:
+    """A YAML parser error in one line: where and what."""
+    mark = getattr(exc, "problem_mark", None)
+    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+    problem = getattr(exc, "problem", None) or getattr(exc, "reason", None) or "invalid YAML"
+    return " ".join(f"not valid YAML{where}: {problem}".split())
+
+
+def _check_expansion(data: Any, label: str) -> None:
+    """Refuse YAML whose aliases expand beyond :data:`MAX_YAML_VALUES` values, or loop.
+
+    PyYAML builds an alias as a reference to one object, so a "billion laughs"
+    document loads in kilobytes and explodes only when copied or validated.
+    Sizes are counted once per distinct object (linear in the document), and
+    the top-level key holding the expansion is named.
+    """
+    sizes: dict[int, int] = {}
+    active: set[int] = set()
+
+    def size(obj: Any, field: str) -> int:
+        if isinstance(obj, dict):
+            children: Any = [*obj.keys(), *obj.values()]
+        elif isinstance(obj, list):
+            children = obj
+        else:
+            return 1
+        key = id(obj)
+        if key in sizes:
+            return sizes[key]
+        if key in active:
+            raise ScenarioError(
+                f"{label}: {field}: a YAML alias refers to a value that contains it (a loop); "
+                "write the value out"
+            )
+        active.add(key)
+        total = 1
+        for child in children:
+            total += size(child, field)
+            if total > MAX_YAML_VALUES:
+                raise ScenarioError(
+                    f"{label}: {field}: YAML aliases expand to more than {MAX_YAML_VALUES:,} "
+                    "values (an alias bomb?); write the values out or use fewer aliases"
+                )
+        active.discard(key)
+        sizes[key] = total
+        return total
+
     try:
-        text = path.read_text()
-    except FileNotFoundError:
-        names = ", ".join(builtin_scenarios())
+        if isinstance(data, dict):
+            for key, value in data.items():
+                size(value, str(key))
+        else:
+            size(data, "(top level)")
+    except RecursionError:
         raise ScenarioError(
-            f"{label}: file not found; give a scenario file or a built-in name ({names})"
+            f"{label}: (top level): values are nested too deeply; flatten the document"
         ) from None
-    except OSError as exc:
-        raise ScenarioError(f"{label}: cannot read file ({exc.strerror})") from None
+
+
+def parse_yaml(text: str | bytes, label: str) -> Any:
+    """``yaml.safe_load`` bounded in time and memory, with one-line errors naming ``label``."""
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or "invalid YAML"
-        raise ScenarioError(f"{label}: not valid YAML{where}: {problem}") from None
+        raise ScenarioError(f"{label}: {_yaml_problem(exc)}") from None
+    except RecursionError:
+        raise ScenarioError(
+            f"{label}: (top level): values are nested too deeply; flatten the document"
+        ) from None
+    _check_expansion(data, label)
+    return data
+
+
+def _read_yaml(path: Path, label: str) -> dict[str, Any]:
+    try:
+        if path.is_file() and path.stat().st_size > MAX_SCENARIO_BYTES:
+            raise ScenarioError(
+                f"{label}: file is {path.stat().st_size / 2**20:.0f} MiB; a scenario file may "
+                f"be at most {MAX_SCENARIO_BYTES // 2**20} MiB (put large data in a map or "
+                "point file)"
+            )
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        names = ", ".join(builtin_scenarios())
+        hint = ""
+        if str(label).lower() in ("true", "false", "yes", "no", "0", "1"):
+            hint = " (flags such as --no-figures take no value)"
+        raise ScenarioError(
+            f"{label}: file not found; give a scenario file or a built-in name ({names}){hint}"
+        ) from None
+    except IsADirectoryError:
+        raise ScenarioError(f"{label}: is a folder; give a scenario YAML file") from None
+    except OSError as exc:
+        raise ScenarioError(f"{label}: cannot read file ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(
+            f"{label}: not UTF-8 text (byte {raw[exc.start]:#04x} at offset {exc.start}); "
+            "save the scenario as UTF-8"
+        ) from None
+    data = parse_yaml(text, label)
     if not isinstance(data, dict):
         raise ScenarioError(f"{label}: (top level): expected a mapping of scenario keys")
     return data
@@ -214,9 +372,17 @@ def apply_overrides(data: dict[str, Any], overrides: list[str], source: str) -> 
     data = copy.deepcopy(data)
     for item in overrides:
         key, sep, raw = item.partition("=")
-        if not sep or not key:
-            raise ScenarioError(f"--set {item!r}: expected KEY=VALUE, e.g. strategy.params.d0_m=5")
-        set_dotted(data, key.strip(), yaml.safe_load(raw))
+        key = key.strip()
+        parts = key.split(".")
+        if not sep or not key or not all(p.strip() for p in parts):
+            raise ScenarioError(
+                f"--set {item!r}: expected KEY=VALUE with a dotted KEY, e.g. strategy.params.d0_m=5"
+            )
+        try:
+            value = parse_yaml(raw, f"--set {key}")
+        except ScenarioError as exc:
+            raise ScenarioError(f"{exc}; quote strings, e.g. --set '{key}=\"text\"'") from None
+        set_dotted(data, key, value)
     return data
 
 
@@ -237,8 +403,12 @@ def read_scenario_data(path_or_name: str | Path) -> tuple[dict[str, Any], str, P
     """Raw scenario data, its label for messages, and the folder relative paths refer to."""
     text = str(path_or_name)
     path = Path(text)
+    try:
+        exists = path.exists()
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte
+        raise ScenarioError(f"{text[:80]!r}: not a usable file name ({exc})") from None
     bare_name = not text.endswith((".yaml", ".yml")) and "/" not in text
-    if not path.exists() and bare_name and text in builtin_scenarios():
+    if not exists and bare_name and text in builtin_scenarios():
         ref = resources.files(BUILTIN_PACKAGE) / f"{text}.yaml"
         with resources.as_file(ref) as real:
             return _read_yaml(real, text), text, real.parent

@@ -98,11 +98,19 @@ def write_rows(path: Path, rows: list[dict[str, Any]]) -> Path:
     if rows:
         keys = list(dict.fromkeys(k for r in rows for k in r))
         cols = {k: [jsonable(r.get(k)) for r in rows] for k in keys}
-        table = pa.table({k: pa.array(v) for k, v in cols.items()})
+        table = pa.table({k: _column(v) for k, v in cols.items()})
     else:
         table = pa.table({"step": pa.array([], pa.int64()), "kind": pa.array([], pa.string())})
     atomic_write(path, lambda tmp: pq.write_table(table, tmp))
     return path
+
+
+def _column(values: list[Any]) -> pa.Array:
+    """One table column; values of mixed types (``15.0`` and ``'15.0'``) become text."""
+    try:
+        return pa.array(values)
+    except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError, OverflowError):
+        return pa.array([None if v is None else json.dumps(v) for v in values], pa.string())
 
 
 def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
@@ -121,6 +129,34 @@ def is_run_folder(path: Path) -> bool:
     return (path / SUMMARY).is_file() or (path / SCENARIO).is_file()
 
 
+def check_writable(folder: str | Path) -> None:
+    """Refuse (:class:`OutputError`) a folder that run folders could not be created in.
+
+    Creates what is missing and a temporary folder inside, then removes all of it:
+    nothing is left, whatever the answer.
+    """
+    folder = Path(folder)
+    created: list[Path] = []
+    try:
+        here = folder.absolute()
+        while not here.exists() and here != here.parent:
+            created.append(here)
+            here = here.parent
+        folder.mkdir(parents=True, exist_ok=True)
+        os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".tether-check-"))
+    except OSError as exc:
+        raise OutputError(
+            f"{folder}: cannot create run folders here ({exc.strerror or exc}); choose a "
+            "writable output.dir or --out"
+        ) from None
+    finally:
+        for path in created:  # deepest first
+            try:
+                path.rmdir()
+            except OSError:
+                break
+
+
 class RunFolder:
     """The files of one run, staged and committed as a whole (see the module docstring).
 
@@ -134,26 +170,39 @@ class RunFolder:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        if self.path.exists():
-            if not self.path.is_dir():
+        self._created: list[Path] = []  # parent folders made here, removed again on abort
+        try:
+            exists = self.path.exists()
+            if exists and not self.path.is_dir():
                 raise OutputError(f"{self.path}: exists and is not a folder; choose another --out")
-            if any(self.path.iterdir()) and not is_run_folder(self.path):
+            if exists and any(self.path.iterdir()) and not is_run_folder(self.path):
                 raise OutputError(
                     f"{self.path}: folder is not empty and not a tether run folder; choose a "
                     "new or empty folder for --out (tether replaces only its own run folders)"
                 )
-        try:
+            parent = self.path.absolute().parent
+            while not parent.exists() and parent != parent.parent:
+                self._created.append(parent)
+                parent = parent.parent
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.staging = Path(
                 tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.staging-")
             )
         except OSError as exc:
+            self._remove_created()
             raise OutputError(
                 f"{self.path}: cannot create the run folder ({exc.strerror or exc}); "
                 "choose a writable --out"
             ) from None
         os.chmod(self.staging, 0o777 & ~_UMASK)
         self.written: list[str] = []
+
+    def _remove_created(self) -> None:
+        for folder in self._created:  # deepest first
+            try:
+                folder.rmdir()
+            except OSError:
+                break
 
     def file(self, name: str) -> Path:
         self.written.append(name)
@@ -187,8 +236,13 @@ class RunFolder:
         return self.path
 
     def abort(self) -> None:
-        """Drop everything staged (the target folder is left as it was)."""
+        """Drop everything staged (the target folder is left as it was).
+
+        Parent folders created for the run are removed again if still empty, so a
+        failed run leaves nothing behind.
+        """
         shutil.rmtree(self.staging, ignore_errors=True)
+        self._remove_created()
 
 
 def git_hash() -> str | None:

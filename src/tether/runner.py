@@ -9,18 +9,32 @@ This is the Python API behind ``tether run``::
 
 from __future__ import annotations
 
+import copy
 import datetime as dt
+import inspect
+import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from pydantic import ValidationError
 
-from tether.config import Scenario, format_validation_error, load_scenario
-from tether.errors import MapError, ScenarioError, TetherError
+from tether.config import (
+    MAX_SEED,
+    MAX_SWEEP_COMBINATIONS,
+    InitConfig,
+    Scenario,
+    format_validation_error,
+    load_scenario,
+    scenario_from_dict,
+    set_dotted,
+    sweep_label,
+)
+from tether.errors import MapError, OutputError, ScenarioError, TetherError
 from tether.graph import is_connected
+from tether.limits import format_bytes, memory_budget_bytes
 from tether.plugins import load_builtins
 from tether.record import TrajectoryRecorder, summarize
 from tether.registry import SCENES, STRATEGIES
@@ -118,35 +132,188 @@ def strategy_params(scenario: Scenario, cls: type) -> Any:
         ) from None
 
 
-def build(scenario: Scenario, seed: int | None = None) -> Built:
-    """Turn a validated scenario into world, sensor, team and strategy (no simulation).
+def as_scenario(scenario: Scenario | dict[str, Any] | str | Path) -> Scenario:
+    """A :class:`Scenario` from a scenario, a dict, a built-in name or a YAML path."""
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, dict):
+        return scenario_from_dict(scenario, "<scenario dict>")
+    if isinstance(scenario, str | Path):
+        return load_scenario(scenario)
+    raise TypeError(
+        "scenario must be a Scenario, a dict, a built-in scenario name or a YAML path "
+        f"(got {type(scenario).__name__})"
+    )
 
-    Everything ``tether validate`` checks happens here, before any simulation:
-    the strategy's parameters, the world, the initial team and whatever the
-    strategy's ``from_scenario`` checks.
+
+def check_seed(seed: Any) -> int | None:
+    """``seed`` if it is ``None`` or an integer in ``[0, 2**63 - 1]``; else a clear error."""
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
+        raise TypeError(f"seed must be an integer (got {type(seed).__name__} {seed!r})")
+    if not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"seed must be an integer in [0, 2**63 - 1] (got {seed})")
+    return int(seed)
+
+
+def check_sweep(scenario: Scenario, cls: type[Strategy]) -> None:
+    """Every value of every ``sweep:`` axis gives a valid scenario and its own run folder.
+
+    Checked value by value (linear in the number of values, not the grid): the
+    axis must name a scenario key (for ``strategy.params.*`` a parameter of the
+    strategy, for ``world.params.*`` one of the scene), each value must pass
+    validation, and two values of one axis must not map to one run folder
+    (``15.0`` and ``'15.0'``). The grid is at most ``MAX_SWEEP_COMBINATIONS``.
     """
+    if not scenario.sweep:
+        return
+    src = scenario.source
+    n = math.prod(len(v) for v in scenario.sweep.values())
+    if n > MAX_SWEEP_COMBINATIONS:
+        raise ScenarioError(
+            f"{src}: sweep: the grid has {n:,} combinations; at most "
+            f"{MAX_SWEEP_COMBINATIONS:,} (sweep fewer values, or split the sweep)"
+        )
+    base = scenario.model_dump(mode="json")
+    base.pop("sweep", None)
+    for key, values in scenario.sweep.items():
+        field = f"sweep.{key}"
+        labels: dict[str, Any] = {}
+        for value in values:
+            data = copy.deepcopy(base)
+            set_dotted(data, key, value)
+            try:
+                trial = scenario_from_dict(data, "", scenario.base_dir)
+                trial_cls = strategy_class(trial) if key.startswith("strategy.") else cls
+                strategy_params(trial, trial_cls)
+                _check_scene_parameter(trial, key)
+            except ScenarioError as exc:
+                problem = str(exc).removeprefix(": ")
+                raise ScenarioError(
+                    f"{src}: {field}: value {_short(value)} is refused ({problem})"
+                ) from None
+            label = sweep_label({key: value})
+            if label in labels:
+                raise ScenarioError(
+                    f"{src}: {field}: values {_short(labels[label])} and {_short(value)} give "
+                    f"the same run folder {label!r}; remove one"
+                )
+            labels[label] = value
+
+
+def _short(value: Any, limit: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _check_scene_parameter(scenario: Scenario, key: str) -> None:
+    """A swept ``world.params.X`` must be a parameter of the scene."""
+    parts = key.split(".")
+    if parts[:2] != ["world", "params"] or len(parts) < 3 or scenario.world.scene not in SCENES:
+        return
+    factory = SCENES.get(scenario.world.scene)
+    accepted = [p for p in inspect.signature(factory).parameters if p != "rng"] + ["seed"]
+    if parts[2] not in accepted:
+        raise ScenarioError(
+            f": world.params.{parts[2]}: scene {scenario.world.scene!r} has no such parameter; "
+            f"accepted: {', '.join(accepted)}"
+        )
+
+
+def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = None) -> Built:
+    """Turn a scenario into world, sensor, team and strategy (no simulation).
+
+    ``scenario`` may be a :class:`Scenario`, a dict, a built-in name or a YAML
+    path. Everything ``tether validate`` checks happens here, before any
+    simulation, and ``tether run`` calls this same function: the strategy's
+    parameters, the ``sweep:`` block, the world, the initial team, whatever
+    the strategy's ``initial_state`` / ``from_scenario`` check, and the memory
+    the run would need.
+    """
+    scenario = as_scenario(scenario)
+    seed = check_seed(seed)
     rng = np.random.default_rng(scenario.seed if seed is None else seed)
     cls = strategy_class(scenario)
     params = strategy_params(scenario, cls)
+    check_sweep(scenario, cls)
     world = build_world(scenario, rng)
     sensor = make_sensor(scenario)
     initial = cls.initial_state(params, scenario, world, rng)
+    pairs = None
     if initial is None:
-        initial = TeamState.at_rest(place_team(scenario, world, sensor, rng))
+        positions, pairs = _place_team(scenario, world, sensor, rng)
+        initial = TeamState.at_rest(positions)
     strategy = cls.from_scenario(params, scenario, world, initial, rng)
+    check_run_size(scenario, initial, strategy, sensor, pairs)
     return Built(scenario, world, sensor, initial, strategy, rng)
+
+
+def check_run_size(
+    scenario: Scenario,
+    initial: TeamState,
+    strategy: Strategy,
+    sensor: SensorModel,
+    pairs: np.ndarray | None,
+) -> None:
+    """Refuse a run whose records or per-step sensing would not fit in memory.
+
+    The estimate counts what the recorder keeps (per-step records; positions
+    and links of every recorded step, links counted as in the initial team)
+    and, for strategies on the core sensing model with occlusion, the
+    per-step occlusion test (``sum of degree^2`` candidate triples).
+    """
+    n = initial.n + (0 if initial.fixed is None else len(initial.fixed))
+    steps = scenario.sim.max_steps + 1
+    recorded = scenario.sim.max_steps // scenario.output.record_every + 1
+    links = 0 if pairs is None else len(pairs)
+    records = steps * 400  # a StepRecord and its values per step
+    records += recorded * n * (initial.dim + 2) * 8 * 2  # positions, then their table columns
+    records += recorded * links * 2 * 8 * 2  # link pairs, then their table columns
+    occlusion = 0.0
+    core_sensing = type(strategy).sense is Strategy.sense
+    if core_sensing and links and sensor.occlusion and sensor.body_radius_m > 0:
+        degree = np.bincount(pairs.ravel(), minlength=initial.n).astype(float)
+        occlusion = float(degree @ degree) * 150  # the arrays of one step's occlusion test
+    need, budget = records + occlusion, memory_budget_bytes()
+    if need <= budget:
+        return
+    what = f"{initial.n:,} robots with {links:,} links at the start"
+    if occlusion > records:
+        raise ScenarioError(
+            f"{scenario.source}: team.n_robots: {what}: testing which robot bodies hide which "
+            f"links needs about {format_bytes(occlusion)} at every step, more than the "
+            f"{format_bytes(budget)} allowed here; use fewer robots, a shorter sensing.range_m, "
+            "or sensing.occlusion: false"
+        )
+    raise ScenarioError(
+        f"{scenario.source}: team.n_robots: {what}: recording {scenario.sim.max_steps:,} steps "
+        f"needs about {format_bytes(need)}, more than the {format_bytes(budget)} allowed here; "
+        "use fewer robots or steps, or raise output.record_every"
+    )
 
 
 def place_team(
     scenario: Scenario, world: World, sensor: SensorModel, rng: np.random.Generator
 ) -> np.ndarray:
     """The team of ``team.init``: in free space and connected in the sensing graph."""
+    return _place_team(scenario, world, sensor, rng)[0]
+
+
+def _place_team(
+    scenario: Scenario, world: World, sensor: SensorModel, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Positions of ``team.init`` and their sensing pairs (without occlusion)."""
     try:
         positions = initial_positions(
             scenario.team.init, scenario.team.n_robots, world, rng, scenario.sensing.range_m
         )
     except ValueError as exc:
-        raise ScenarioError(f"{scenario.source}: team.init: {exc}") from None
+        head, sep, rest = str(exc).partition(": ")
+        field = f"team.init.{head}" if sep and head in InitConfig.model_fields else "team.init"
+        raise ScenarioError(
+            f"{scenario.source}: {field}: {rest if field != 'team.init' else exc}"
+        ) from None
     bad = ~world.points_free(positions)
     if bad.any():
         k = int(np.argmax(bad))
@@ -154,13 +321,15 @@ def place_team(
             f"{scenario.source}: team.init: robot {k} at {positions[k].tolist()} is inside an "
             "obstacle or outside the world; move the team into free space"
         )
-    pairs = sensed_pairs(positions, sensor, world)
+    # occlusion by robot bodies never changes whether the team is connected (see
+    # tether.sensing.robots), so the check skips it: linear in the links, not their squares
+    pairs = sensed_pairs(positions, replace(sensor, occlusion=False), world)
     if not is_connected(len(positions), pairs):
         raise ScenarioError(
             f"{scenario.source}: team.init: the initial team is not connected with "
             f"sensing.range_m={sensor.range_m}; place robots closer (spacing_m) or raise the range"
         )
-    return positions
+    return positions, pairs
 
 
 def default_run_dir(scenario: Scenario, seed: int, root: str | Path | None = None) -> Path:
@@ -169,7 +338,7 @@ def default_run_dir(scenario: Scenario, seed: int, root: str | Path | None = Non
 
 
 def run(
-    scenario: Scenario | str | Path,
+    scenario: Scenario | dict[str, Any] | str | Path,
     *,
     out_dir: str | Path | None = None,
     seed: int | None = None,
@@ -181,8 +350,12 @@ def run(
     ``summary.json`` is written last, and the folder appears at ``out_dir``
     only when the run and its figures are complete.
     """
-    if not isinstance(scenario, Scenario):
-        scenario = load_scenario(scenario)
+    scenario = as_scenario(scenario)
+    seed = check_seed(seed)
+    if out_dir is not None and not isinstance(out_dir, str | Path):
+        raise TypeError(f"out_dir must be a path (got {type(out_dir).__name__})")
+    if figures is not None and not isinstance(figures, bool):
+        raise TypeError(f"figures must be True, False or None (got {figures!r})")
     if seed is not None and seed != scenario.seed:  # the run folder records the seed it ran
         source, base_dir = scenario.source, scenario.base_dir
         scenario = scenario.model_copy(update={"seed": seed})
@@ -206,6 +379,10 @@ def run(
             recorder=recorder,
         )
         wall = time.perf_counter() - start
+    except BaseException:
+        folder.abort()
+        raise
+    try:
         folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
         folder.write_table("steps.parquet", recorder.step_columns())
         folder.write_table("robots.parquet", recorder.robot_columns())
@@ -216,6 +393,11 @@ def run(
                 folder.save_figure(fig, name)
         summary = summarize(scenario, seed, result, wall)
         folder.commit(summary)
+    except OSError as exc:  # the disk filled up, the folder was removed, ...
+        folder.abort()
+        raise OutputError(
+            f"{path}: cannot write the run folder ({exc.strerror or exc}); choose another --out"
+        ) from None
     except BaseException:
         folder.abort()
         raise
@@ -252,4 +434,14 @@ def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Any]:
     return figs
 
 
-__all__ = ["Built", "RunOutcome", "TetherError", "build", "build_world", "run", "run_figures"]
+__all__ = [
+    "Built",
+    "RunOutcome",
+    "TetherError",
+    "as_scenario",
+    "build",
+    "build_world",
+    "check_seed",
+    "run",
+    "run_figures",
+]

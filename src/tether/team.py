@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from tether.config import InitConfig
 from tether.graph import is_connected, pairs_within
@@ -22,40 +23,125 @@ def random_connected(
     spacing_m: float,
     min_separation_m: float = 0.0,
     center: np.ndarray | None = None,
-    max_tries: int = 200,
+    max_tries: int = 30,
 ) -> np.ndarray:
-    """``n`` robots grown one at a time, each within ``spacing_m`` of a random earlier one.
+    """``n`` robots grown from ``center``, each within ``spacing_m`` of a random earlier one.
 
-    Every new robot is at least ``min_separation_m`` from all others, in free
-    space, and has a clear line of sight to the robot it was placed near, so
-    the disc graph of radius ``spacing_m`` is connected by construction.
+    A new robot is drawn at distance ``spacing_m * U(0.3, 1)`` in a uniform
+    direction from an *anchor*, a uniformly random robot placed earlier; it is
+    kept if it is in free space, sees its anchor (clear segment) and is at least
+    ``min_separation_m`` from every robot. The disc graph of radius
+    ``spacing_m`` is therefore connected by construction.
+
+    O(n log n), and the same process: candidates are drawn in batches, checked
+    together against a k-d tree of the robots placed so far and accepted in
+    order (a candidate within ``min_separation_m`` of an earlier accepted one of
+    its batch is refused, as one at a time). A batch may add at most 1/32 of the
+    team (one robot at a time while the team has fewer than 64), so anchors lag
+    the team by at most 3 %; the statistics (spread, nearest-neighbour distance,
+    degree) match the one-at-a-time process (tests/test_placement.py). An
+    anchor around which ``max_tries`` candidates were refused is retired (its
+    neighbourhood is full: this is what makes large teams fast, and it changes
+    nothing for anchors with room). When every anchor is retired, the
+    placement is refused with a ``ValueError``; the work is bounded by about
+    ``n * (max_tries + 1)`` candidates.
     """
+    dim = world.dim
     center = _default_center(world) if center is None else np.asarray(center, dtype=float)
+    if not np.isfinite(center).all():
+        raise ValueError("center: must be finite")
     if not world.points_free(center[None])[0]:
-        raise ValueError("the team's center is inside an obstacle")
-    pos = [center]
-    while len(pos) < n:
-        for _ in range(max_tries):
-            anchor = pos[rng.integers(len(pos))]
-            direction = rng.normal(size=world.dim)
-            direction /= np.linalg.norm(direction)
-            radius = spacing_m * rng.uniform(0.3, 1.0)
-            cand = anchor + radius * direction
-            others = np.asarray(pos)
-            if np.min(np.linalg.norm(others - cand, axis=1)) < min_separation_m:
-                continue
-            if not world.points_free(cand[None])[0]:
-                continue
-            if not world.segments_clear(anchor[None], cand[None])[0]:
-                continue
-            pos.append(cand)
-            break
-        else:
+        raise ValueError(
+            f"center: {center.tolist()} is inside an obstacle or outside the world; "
+            "move the team into free space"
+        )
+    if not (np.isfinite(spacing_m) and spacing_m > 0):
+        raise ValueError(f"spacing_m: must be a positive finite number (got {spacing_m!r})")
+    pos = np.empty((n, dim))
+    pos[0] = center
+    count = 1
+    fails = np.zeros(n, dtype=np.int64)
+    alive = np.zeros(n, dtype=bool)
+    alive[0] = True
+    tree, tree_count = None, 0
+    rate = 1.0  # the share of candidates accepted lately
+    reach = np.inf  # how many candidates the last batch could decide (conflict chains)
+    while count < n:
+        anchors_alive = np.flatnonzero(alive[:count])
+        if len(anchors_alive) == 0:
             raise ValueError(
-                f"could not place robot {len(pos)} of {n}: the free space near the team is "
-                "too small; lower min_separation_m or n_robots, or raise spacing_m"
+                f"could not place robot {count} of {n}: no free space is left within "
+                f"spacing_m={spacing_m:g} of the team with robots min_separation_m="
+                f"{min_separation_m:g} apart; lower n_robots or min_separation_m, raise "
+                "spacing_m, or give the team more room"
             )
-    return np.asarray(pos)
+        limit = min(max(1, count // 32), n - count)  # robots this batch may add
+        batch = int(min(max(1.0, 1.2 * limit / rate), 2 * reach, 4 * len(anchors_alive) + 16))
+        anchors = anchors_alive[rng.integers(len(anchors_alive), size=batch)]
+        direction = rng.normal(size=(batch, dim))
+        norm = np.linalg.norm(direction, axis=1)
+        direction /= np.where(norm > 0, norm, 1.0)[:, None]
+        radius = spacing_m * rng.uniform(0.3, 1.0, size=batch)
+        cand = pos[anchors] + radius[:, None] * direction
+        ok = world.points_free(cand)
+        if min_separation_m > 0 and ok.any():
+            if tree_count != count:
+                tree = cKDTree(pos[:count], balanced_tree=False, compact_nodes=False)
+                tree_count = count
+            idx = np.flatnonzero(ok)
+            dist, _ = tree.query(cand[idx], k=1, distance_upper_bound=min_separation_m)
+            ok[idx[dist < min_separation_m]] = False
+        if ok.any():
+            idx = np.flatnonzero(ok)
+            ok[idx[~world.segments_clear(pos[anchors[idx]], cand[idx])]] = False
+        tried, reach = batch, np.inf
+        if min_separation_m > 0 and ok.sum() > 1:
+            idx = np.flatnonzero(ok)
+            pairs = cKDTree(cand[idx]).query_pairs(r=min_separation_m, output_type="ndarray")
+            if len(pairs):
+                keep, decided = _first_come(len(idx), pairs)
+                ok[idx[~keep]] = False
+                if decided < len(idx):  # from there on, candidates count as not tried
+                    tried = reach = int(idx[decided])
+                    ok[tried:] = False
+        accepted = np.flatnonzero(ok)[:limit]
+        if len(accepted) == limit:  # the candidates after the last accepted one: not tried
+            tried = int(accepted[-1]) + 1
+        refused = anchors[:tried][~ok[:tried]]
+        np.add.at(fails, refused, 1)
+        alive[refused] &= fails[refused] < max_tries
+        pos[count : count + len(accepted)] = cand[accepted]
+        alive[count : count + len(accepted)] = True
+        count += len(accepted)
+        rate = max(len(accepted), 0.5) / tried
+    return pos
+
+
+def _first_come(k: int, pairs: np.ndarray, rounds: int = 12) -> tuple[np.ndarray, int]:
+    """Which of ``k`` candidates, taken in order, are kept when close pairs exclude each other.
+
+    Candidate ``j`` is kept iff no kept candidate ``i < j`` is paired with it:
+    what placing them one at a time gives. Resolved in vectorised rounds (a
+    candidate is decided once every earlier partner is); after ``rounds``
+    rounds the answer is exact for the first ``m`` candidates, ``m`` returned
+    with the mask (the later ones count as not tried).
+    """
+    pairs = np.sort(np.asarray(pairs, dtype=np.intp), axis=1)
+    first, second = pairs[:, 0], pairs[:, 1]
+    state = np.zeros(k, dtype=np.int8)  # 0 undecided, 1 kept, -1 refused
+    state[np.setdiff1d(np.arange(k), second)] = 1
+    for _ in range(rounds):
+        undecided = state == 0
+        if not undecided.any():
+            break
+        blocked = np.zeros(k, dtype=bool)
+        blocked[second[state[first] == 1]] = True
+        waiting = np.zeros(k, dtype=bool)
+        waiting[second[state[first] == 0]] = True
+        state[undecided & blocked] = -1
+        state[undecided & ~blocked & ~waiting] = 1
+    open_ = np.flatnonzero(state == 0)
+    return state == 1, int(open_[0]) if len(open_) else k
 
 
 def uniform_connected(
@@ -68,7 +154,12 @@ def uniform_connected(
     center: np.ndarray | None = None,
     max_tries: int = 2000,
 ) -> np.ndarray:
-    """``n`` robots uniform in a box, redrawn until connected within ``range_m``."""
+    """``n`` robots uniform in a box, redrawn until connected within ``range_m``.
+
+    At most ``max_tries`` draws, fewer for large teams (about 2 million robot
+    positions in all), so that an impossible request is refused in seconds.
+    """
+    max_tries = int(min(max_tries, max(10, 2_000_000 // max(n, 1))))
     center = _default_center(world) if center is None else np.asarray(center, dtype=float)
     extent = np.broadcast_to(np.asarray(extent_m, dtype=float), (world.dim,))
     for _ in range(max_tries):
@@ -99,13 +190,22 @@ def initial_positions(
     """Place the team as ``cfg`` says (see :class:`tether.config.InitConfig`)."""
     center = None if cfg.center is None else np.asarray(cfg.center, dtype=float)
     if center is not None and len(center) != world.dim:
-        raise ValueError(f"center must have {world.dim} coordinates")
+        raise ValueError(
+            f"center: must have {world.dim} coordinates for a {world.dim}-D world "
+            f"(got {len(center)})"
+        )
     if cfg.kind == "positions":
         if cfg.positions is None:
-            raise ValueError("kind 'positions' needs a 'positions' list")
-        pos = np.asarray(cfg.positions, dtype=float)
+            raise ValueError("positions: kind 'positions' needs a 'positions' list")
+        try:
+            pos = np.asarray(cfg.positions, dtype=float)
+        except ValueError:  # ragged
+            pos = np.empty(0)
         if pos.ndim != 2 or pos.shape != (n, world.dim):
-            raise ValueError(f"positions must be {n} points of {world.dim} coordinates")
+            raise ValueError(
+                f"positions: must be n_robots = {n} points of {world.dim} coordinates "
+                f"(got {len(cfg.positions)})"
+            )
         return pos
     if cfg.kind == "grid":
         return grid_positions(
@@ -113,7 +213,9 @@ def initial_positions(
         )
     if cfg.kind == "uniform":
         if cfg.extent_m is None or len(cfg.extent_m) not in (1, world.dim):
-            raise ValueError(f"kind 'uniform' needs extent_m with {world.dim} side lengths")
+            raise ValueError(
+                f"extent_m: kind 'uniform' needs extent_m with {world.dim} side lengths"
+            )
         return uniform_connected(
             n, world, rng, np.asarray(cfg.extent_m), range_m, cfg.min_separation_m, center
         )

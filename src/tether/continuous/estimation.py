@@ -56,7 +56,7 @@ from tether.continuous.weights import WeightedGraph
 class EstimatorParams(BaseModel):
     """Gains of the estimator (dimensionless, per round); the defaults are the ones runs use."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     k1: float = 4.0
     k2: float = 1.0

@@ -47,7 +47,7 @@ from tether.world.world import World
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class TargetsConfig(_Strict):

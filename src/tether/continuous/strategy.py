@@ -46,7 +46,7 @@ _OUTDOOR = TABLE2["outdoor"]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class ExternalForce(_Strict):
@@ -73,7 +73,7 @@ class ExternalForce(_Strict):
 class EstimatorConfig(EstimatorParams):
     """Decentralized estimator (its gains), rounds and message-layer faults."""
 
-    model_config = ConfigDict(extra="forbid", frozen=False)
+    model_config = ConfigDict(extra="forbid", frozen=False, allow_inf_nan=False)
 
     rounds_per_substep: int = Field(default=20, ge=1)
     warmup_rounds: int = Field(default=3000, ge=0)
@@ -119,6 +119,18 @@ class ConnectivityStrategyParams(_Strict):
             if preset in TABLE2:
                 data = {**TABLE2[preset], **data}
         return data
+
+    @model_validator(mode="after")
+    def _consistent(self) -> ConnectivityStrategyParams:
+        try:  # ValueError such as "need 0 < R's < Rs" for radii out of order
+            self.connectivity()
+            self.integrator()
+        except ValueError as exc:
+            raise ValueError(
+                f"{exc} (R's = rs_inner_m, Rs = rs_m, Ro = ro_m, R'o = ro_outer_m, "
+                "Rc = rc_m, R'c = rc_outer_m)"
+            ) from None
+        return self
 
     def connectivity(self) -> ConnectivityParams:
         return ConnectivityParams(
@@ -171,6 +183,34 @@ def external_force(
     return f * np.minimum(1.0, spec.magnitude_n / np.maximum(norm, 1e-300))
 
 
+def _check_external(params: ConnectivityStrategyParams, initial: TeamState, src: str) -> None:
+    """Robot indices and vector sizes of the external force and failures fit the team."""
+    n, dim = initial.n, initial.dim
+    ext, field = params.external, f"{src}: strategy.params.external"
+    bad = [r for r in ext.robots if not 0 <= r < n]
+    if bad:
+        raise ScenarioError(f"{field}.robots: {bad[0]} is not a robot index in 0..{n - 1}")
+    if ext.kind == "goal" and len(ext.goals) != len(ext.robots):
+        raise ScenarioError(
+            f"{field}.goals: {len(ext.goals)} goals for {len(ext.robots)} robots; give one "
+            "goal per robot"
+        )
+    if any(len(g) != dim for g in ext.goals):
+        raise ScenarioError(f"{field}.goals: each goal needs {dim} coordinates")
+    if ext.forces is not None and (
+        len(ext.forces) not in (1, n) or any(len(f) != dim for f in ext.forces)
+    ):
+        raise ScenarioError(
+            f"{field}.forces: give one force of {dim} numbers for all robots or one per robot ({n})"
+        )
+    bad = [r for r in params.estimator.failures if not 0 <= r < n]
+    if bad:
+        raise ScenarioError(
+            f"{src}: strategy.params.estimator.failures: {bad[0]} is not a robot index in "
+            f"0..{n - 1}"
+        )
+
+
 def _unsafe_start(lam: float, conn: ConnectivityParams) -> str:
     return (
         f"the initial weighted graph has lambda2 = {lam:.3g} <= lambda2_min = "
@@ -202,6 +242,7 @@ class ConnectivityStrategy(Strategy):
         initial_state: TeamState,
         rng: np.random.Generator,
     ) -> ConnectivityStrategy:
+        _check_external(params, initial_state, scenario.source)
         cls.check_start(params, scenario, world, initial_state)
         return cls(params)
 

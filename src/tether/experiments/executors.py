@@ -15,6 +15,7 @@ client: ``address`` of a running scheduler, e.g. ``tcp://10.0.0.5:8786`` started
 from __future__ import annotations
 
 import os
+import traceback
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
@@ -24,7 +25,7 @@ from typing import Any
 from tether.errors import TetherError
 from tether.registry import Registry
 
-__all__ = ["EXECUTORS", "Trial", "TrialOutcome", "execute", "run_trial"]
+__all__ = ["EXECUTORS", "Trial", "TrialOutcome", "check_executor", "execute", "run_trial"]
 
 
 @dataclass(frozen=True)
@@ -38,15 +39,41 @@ class Trial:
     run_dir: str
 
 
+#: seconds to wait for a Dask scheduler at ``--address`` before giving up
+DASK_CONNECT_TIMEOUT_S = 5.0
+
+
 @dataclass(frozen=True)
 class TrialOutcome:
+    """A finished trial (``summary``) or a failed one (``error``, one line).
+
+    ``internal`` is true when the failure was not a :class:`TetherError`
+    (a bug, or a plug-in raising anything else); ``details`` then holds the
+    traceback as text.
+    """
+
     trial: Trial
     summary: dict[str, Any] | None
     error: str | None = None
+    internal: bool = False
+    details: str | None = None
+
+
+def failed(trial: Trial, exc: BaseException, details: str | None = None) -> TrialOutcome:
+    """The outcome of a trial that raised ``exc``: one line, internal unless a TetherError."""
+    if isinstance(exc, TetherError):
+        return TrialOutcome(trial, None, " ".join(str(exc).split()))
+    message = " ".join(f"internal error {type(exc).__name__}: {exc}".split())
+    return TrialOutcome(trial, None, message, internal=True, details=details)
 
 
 def run_trial(trial: Trial) -> TrialOutcome:
-    """Run one trial (in whatever process or machine the executor chose)."""
+    """Run one trial (in whatever process or machine the executor chose).
+
+    Whatever the trial raises (bad input, a strategy's RuntimeError, a
+    MemoryError) becomes a failed :class:`TrialOutcome`, so the sweep goes on
+    with the other trials; only an interrupt (Ctrl-C) stops it.
+    """
     os.environ.setdefault("MPLBACKEND", "Agg")
     from tether.config import scenario_from_dict
     from tether.runner import run
@@ -54,8 +81,8 @@ def run_trial(trial: Trial) -> TrialOutcome:
     try:
         scenario = scenario_from_dict(trial.scenario, trial.source, Path(trial.base_dir))
         outcome = run(scenario, out_dir=trial.run_dir, seed=trial.seed, figures=False)
-    except TetherError as exc:  # bad input: one line, the sweep goes on with the others
-        return TrialOutcome(trial, None, str(exc))
+    except Exception as exc:
+        return failed(trial, exc, traceback.format_exc())
     return TrialOutcome(trial, outcome.summary)
 
 
@@ -72,11 +99,15 @@ def _serial(trials: list[Trial], workers: int, address: str | None) -> Iterator[
 @EXECUTORS.register("processes")
 def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
     with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
-        pending = {pool.submit(run_trial, t) for t in trials}
+        submitted = {pool.submit(run_trial, t): t for t in trials}
+        pending = set(submitted)
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
-                yield future.result()
+                try:
+                    yield future.result()
+                except Exception as exc:  # the worker process died (killed, out of memory)
+                    yield failed(submitted[future], exc)
 
 
 @EXECUTORS.register("dask")
@@ -93,10 +124,23 @@ def _dask(trials: list[Trial], workers: int, address: str | None) -> Iterator[Tr
             n_workers=max(1, workers), threads_per_worker=1, processes=True, dashboard_address=None
         )
     try:
-        with Client(address or cluster) as client:
+        try:
+            client = Client(address or cluster, timeout=DASK_CONNECT_TIMEOUT_S)
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            reason = " ".join(str(exc).split()) or type(exc).__name__
+            raise TetherError(
+                f"--address {address}: no Dask scheduler answered within "
+                f"{DASK_CONNECT_TIMEOUT_S:g} s ({reason[:120]}); start `dask scheduler` there "
+                "or check the address, e.g. tcp://HOST:8786"
+            ) from None
+        with client:
             futures = client.map(run_trial, trials, pure=False)
+            trial_of = {f.key: t for f, t in zip(futures, trials, strict=True)}
             for future in as_completed(futures):
-                yield future.result()
+                try:
+                    yield future.result()
+                except Exception as exc:  # the worker died or the scheduler went away
+                    yield failed(trial_of[future.key], exc)
     finally:
         if cluster is not None:
             cluster.close()
@@ -110,9 +154,23 @@ def execute(
     address: str | None = None,
 ) -> Iterator[TrialOutcome]:
     """Run ``trials`` on the named executor, yielding each outcome as it finishes."""
+    n = check_executor(executor, workers, address)
+    return EXECUTORS.get(executor)(trials, n, address)
+
+
+def check_executor(executor: str, workers: int | None = None, address: str | None = None) -> int:
+    """Refuse an unknown executor, a bad worker count or a stray address; the worker count."""
     if executor not in EXECUTORS:
         raise TetherError(
             f"unknown executor {executor!r}; expected one of: {', '.join(EXECUTORS.names())}"
         )
-    n = workers if workers is not None else (os.cpu_count() or 1)
-    return EXECUTORS.get(executor)(trials, n, address)
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+    ):
+        raise ValueError(f"workers must be a positive integer or None (got {workers!r})")
+    if address is not None and executor != "dask":
+        raise TetherError(
+            f"--address {address}: only the dask executor uses a scheduler address; "
+            "add --executor dask or drop --address"
+        )
+    return workers if workers is not None else (os.cpu_count() or 1)

@@ -56,13 +56,14 @@ class Export:
     seconds: float
 
 
+_ROS2_HINT = "tether export needs the ROS 2 writers: pip install 'tether[ros2]' (rosbags, mcap)"
+
+
 def _typestore() -> Any:
     try:
         from rosbags.typesys import Stores, get_typestore
     except ImportError:
-        raise TetherError(
-            "tether export needs the ROS 2 writers: pip install 'tether[ros2]' (rosbags, mcap)"
-        ) from None
+        raise TetherError(_ROS2_HINT) from None
     return get_typestore(Stores.ROS2_HUMBLE)
 
 
@@ -346,7 +347,10 @@ def _qos_yaml(transient: bool) -> str:
 
 
 def _write_mcap(path: Path, stream: Iterator, ts: Any) -> dict[str, int]:
-    from mcap.writer import CompressionType, Writer
+    try:
+        from mcap.writer import CompressionType, Writer
+    except ImportError:
+        raise TetherError(_ROS2_HINT) from None
 
     counts: dict[str, int] = {}
     schemas: dict[str, int] = {}
@@ -370,15 +374,18 @@ def _write_mcap(path: Path, stream: Iterator, ts: Any) -> dict[str, int]:
 
 
 def _write_rosbag2(path: Path, stream: Iterator, ts: Any) -> dict[str, int]:
-    from rosbags.interfaces import (
-        Qos,
-        QosDurability,
-        QosHistory,
-        QosLiveliness,
-        QosReliability,
-        QosTime,
-    )
-    from rosbags.rosbag2 import Writer
+    try:
+        from rosbags.interfaces import (
+            Qos,
+            QosDurability,
+            QosHistory,
+            QosLiveliness,
+            QosReliability,
+            QosTime,
+        )
+        from rosbags.rosbag2 import Writer
+    except ImportError:
+        raise TetherError(_ROS2_HINT) from None
 
     def qos(transient: bool) -> Qos:
         inf = QosTime(sec=2147483647, nsec=4294967295)

@@ -15,7 +15,22 @@ class Polyline:
     waypoints: np.ndarray
 
     def __post_init__(self) -> None:
-        self.waypoints = np.atleast_2d(np.asarray(self.waypoints, dtype=float))
+        try:
+            points = np.asarray(self.waypoints, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(
+                "waypoints must be a (k, dim) array of numbers (ragged or non-numeric given)"
+            ) from None
+        points = np.atleast_2d(points)
+        if points.ndim != 2 or points.shape[0] < 1 or points.shape[1] < 1:
+            raise ValueError(
+                f"waypoints must be a (k, dim) array with at least one point (got shape "
+                f"{np.shape(self.waypoints)})"
+            )
+        if not np.isfinite(points).all():
+            k = int(np.argmin(np.isfinite(points).all(axis=1)))
+            raise ValueError(f"waypoints must be finite (point {k} is {points[k].tolist()})")
+        self.waypoints = points
         seg = np.diff(self.waypoints, axis=0)
         self._seg_len = np.linalg.norm(seg, axis=1)
         self._cum = np.concatenate([[0.0], np.cumsum(self._seg_len)])

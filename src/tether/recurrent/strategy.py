@@ -22,9 +22,12 @@ from __future__ import annotations
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
+from tether.config import MAX_LENGTH_M, Coordinate, finite_strict
 from tether.errors import ScenarioError
+from tether.limits import format_bytes, memory_budget_bytes
+from tether.paths.geodesic import CoarseGrid
 from tether.recurrent.baseline_utility import UtilityStrategy
 from tether.recurrent.exploration.run import ExplorationRun
 from tether.recurrent.exploration.sim import (
@@ -51,28 +54,34 @@ __all__ = [
 class ExplorationParams(BaseModel):
     """Physical parameters shared by both strategies (paper defaults at 0.1 m per cell)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = finite_strict()
 
-    speed_m_s: float = Field(default=0.4, gt=0, description="4 cells/step at 0.1 m, 1 s steps")
+    speed_m_s: float = Field(
+        default=0.4, gt=0, le=MAX_LENGTH_M, description="4 cells/step at 0.1 m, 1 s steps"
+    )
     fov_deg: float = Field(default=60.0, gt=0, le=360)
-    sensor_resolution_deg: float = Field(default=1.0, gt=0)
+    sensor_resolution_deg: float = Field(default=1.0, ge=0.01, le=360)
     link_model: str = "los"
-    comm_range_m: float = Field(default=15.0, gt=0, description="150 cells at 0.1 m")
-    coarse_cell_m: float = Field(default=0.3, gt=0, description="geodesic grid cell")
-    scan_steps: int = Field(default=1, ge=1)
-    base_m: list[float] | None = Field(default=None, description="BS position; random if null")
+    comm_range_m: float = Field(
+        default=15.0, gt=0, le=MAX_LENGTH_M, description="150 cells at 0.1 m"
+    )
+    coarse_cell_m: float = Field(
+        default=0.3, gt=0, le=MAX_LENGTH_M, description="geodesic grid cell"
+    )
+    scan_steps: int = Field(default=1, ge=1, le=10_000)
+    base_m: list[Coordinate] | None = Field(default=None, description="BS position; random if null")
 
 
 class RecurrentParams(ExplorationParams):
     """The paper's BS planner (Sec. III-VI)."""
 
-    theta: int = Field(default=1, ge=1)
+    theta: int = Field(default=1, ge=1, le=100_000)
     method: Literal["apx", "ilp"] = "apx"
-    delta: int = Field(default=4, ge=1)
+    delta: int = Field(default=4, ge=1, le=100_000)
     backend: Literal["highs", "scip"] = "highs"
     count_planning_time: bool = False
     check: bool = False
-    time_limit_s: float | None = Field(default=60.0, gt=0)
+    time_limit_s: float | None = Field(default=60.0, gt=0, le=1e7)
 
 
 class UtilityParams(ExplorationParams):
@@ -81,7 +90,17 @@ class UtilityParams(ExplorationParams):
     ratio: float = Field(default=0.5, ge=0, le=1)
 
 
-def _config(params: ExplorationParams, scenario: Any, resolution_m: float) -> ExplorationConfig:
+#: samples of one full depth scan (rays x samples per ray) a scenario may ask for
+MAX_RAY_SAMPLES = 4_000_000
+
+
+def _config(
+    params: ExplorationParams, scenario: Any, resolution_m: float, shape: Any = None
+) -> ExplorationConfig:
+    """The simulator's parameters in cells; ranges beyond the map's diagonal are cut to it.
+
+    ``shape`` is the grid's ``(nx, ny)``; without it ranges are not cut.
+    """
     if params.link_model not in LINK_MODELS:
         known = ", ".join(LINK_MODELS.names())
         raise ScenarioError(
@@ -89,24 +108,65 @@ def _config(params: ExplorationParams, scenario: Any, resolution_m: float) -> Ex
             f"{params.link_model!r}; expected one of: {known}"
         )
     factor = max(int(round(params.coarse_cell_m / resolution_m)), 1)
+    # no ray or link reaches farther than the map's diagonal
+    diagonal = np.inf if shape is None else float(np.hypot(*shape)) + 1.0
 
     def cells(metres: float) -> float:
         # round off float noise (0.4 / 0.1 = 4.000000000000001) so that the
         # paper's settings give exactly the cell values of ExplorationConfig
         return round(metres / resolution_m, 9)
 
+    sensor_cells = min(cells(scenario.sensing.range_m), diagonal)
+    rays = int(np.ceil(360.0 / params.sensor_resolution_deg)) + 1
+    if rays * (sensor_cells / 0.5 + 1) > MAX_RAY_SAMPLES:
+        raise ScenarioError(
+            f"{scenario.source}: strategy.params.sensor_resolution_deg: {rays:,} rays of "
+            f"{sensor_cells:.0f} cells are more than {MAX_RAY_SAMPLES:,} samples per scan; "
+            "raise sensor_resolution_deg or lower sensing.range_m"
+        )
     return ExplorationConfig(
         n_robots=scenario.team.n_robots,
         steps=scenario.sim.max_steps,
         speed_cells=cells(params.speed_m_s * scenario.sim.dt_s),
         fov_deg=params.fov_deg,
-        sensor_range_cells=cells(scenario.sensing.range_m),
+        sensor_range_cells=sensor_cells,
         sensor_resolution_deg=params.sensor_resolution_deg,
         link_model=params.link_model,
-        link_params={"range_cells": cells(params.comm_range_m)},
+        link_params={"range_cells": min(cells(params.comm_range_m), diagonal)},
         coarse_factor=factor,
         scan_steps=params.scan_steps,
     )
+
+
+def _base_cells(base_m: list[float], grid: OccupancyGrid, source: str) -> np.ndarray:
+    """The base station's cell coordinates; refused outside the map or in an obstacle."""
+    field = f"{source}: strategy.params.base_m"
+    if len(base_m) != 2:
+        raise ScenarioError(f"{field}: expected [x, y] in metres (got {len(base_m)} numbers)")
+    lo, hi = grid.bounds_m
+    point = np.asarray(base_m, dtype=float)
+    if not np.all((point >= lo) & (point < hi)):
+        raise ScenarioError(
+            f"{field}: {point.tolist()} is outside the map ({lo[0]:g}..{hi[0]:g} x "
+            f"{lo[1]:g}..{hi[1]:g} m); give a point on the map"
+        )
+    if grid.is_occupied(point[None])[0]:
+        raise ScenarioError(
+            f"{field}: {point.tolist()} is inside an obstacle; move it into free space"
+        )
+    return (point - grid.origin_m) / grid.resolution_m
+
+
+def _check_memory(n_robots: int, grid: OccupancyGrid, source: str) -> None:
+    """Every robot keeps its own map of the grid: refuse a team that would not fit."""
+    need = n_robots * grid.occupied.size * 3  # local maps, plus what exchanging them copies
+    budget = memory_budget_bytes()
+    if need > budget:
+        raise ScenarioError(
+            f"{source}: team.n_robots: {n_robots:,} robots each keeping a map of "
+            f"{grid.occupied.size:,} cells need about {format_bytes(need)}, more than the "
+            f"{format_bytes(budget)} allowed here; use fewer robots or a coarser map"
+        )
 
 
 class _ExplorationPlugin(ExplorationRun):
@@ -134,11 +194,27 @@ class _ExplorationPlugin(ExplorationRun):
     ) -> TeamState:
         """Robots on the coarse cells nearest the BS (random unless ``base_m`` is given)."""
         grid = cls._grid(scenario, world)
-        cfg = _config(params, scenario, grid.resolution_m)
+        cfg = _config(params, scenario, grid.resolution_m, grid.shape)
+        src = scenario.source
+        coarse = CoarseGrid(~grid.occupied, cfg.coarse_factor)
+        if coarse.n_nodes == 0:
+            raise ScenarioError(
+                f"{src}: world: the map has no free square of coarse_cell_m = "
+                f"{params.coarse_cell_m:g} m for the team to move on; use a map with free "
+                "space, or a smaller strategy.params.coarse_cell_m"
+            )
         if params.base_m is not None:
-            base = (np.asarray(params.base_m, float) - grid.origin_m) / grid.resolution_m
+            base = _base_cells(params.base_m, grid, src)
         else:
             base = random_base(grid.occupied, cfg.coarse_factor, rng)
+        region = coarse.components == coarse.components[coarse.nearest_node(base)]
+        if cfg.n_robots > region.sum():
+            raise ScenarioError(
+                f"{src}: team.n_robots: {cfg.n_robots:,} robots, but the free area around the "
+                f"base station has only {int(region.sum()):,} cells of {params.coarse_cell_m:g} m "
+                "to start on; use fewer robots or a larger map"
+            )
+        _check_memory(cfg.n_robots, grid, src)
         base, starts = start_cells(grid.occupied, base, cfg.n_robots, cfg.coarse_factor)
         to_m = grid.origin_m + np.vstack([starts, base[None]]) * grid.resolution_m
         return TeamState.at_rest(to_m[:-1], fixed=to_m[-1:])
@@ -153,7 +229,7 @@ class _ExplorationPlugin(ExplorationRun):
         rng: np.random.Generator,
     ) -> _ExplorationPlugin:
         grid = cls._grid(scenario, world)
-        cfg = _config(params, scenario, grid.resolution_m)
+        cfg = _config(params, scenario, grid.resolution_m, grid.shape)
         base_cells = (np.asarray(initial.fixed[0]) - grid.origin_m) / grid.resolution_m
         return cls(cls.make_policy(params), cfg, grid, base_cells)
 

@@ -58,32 +58,53 @@ def cast_rays(
     k = len(origins)
     headings = np.broadcast_to(np.asarray(headings_rad, dtype=float), (k,))
     fovs = np.broadcast_to(np.asarray(fov_rad, dtype=float), (k,))
-    nx_, ny_ = occupied.shape
     s = np.arange(0.0, range_cells + 1e-9, step_cells)  # (S,)
     result: list[np.ndarray] = [np.empty(0, np.intp)] * k
     # group origins by field of view so that each group is one array operation
     for fov in np.unique(fovs):
-        idx = np.flatnonzero(fovs == fov)
         full = fov >= 2 * np.pi - 1e-9
         n_rays = int(round((2 * np.pi if full else fov) / resolution_rad)) + (0 if full else 1)
         rel = np.arange(n_rays) * resolution_rad if full else np.linspace(-fov / 2, fov / 2, n_rays)
-        ang = headings[idx, None] + rel[None, :]  # (g, R)
-        dx, dy = np.cos(ang), np.sin(ang)
-        px = origins[idx, 0, None, None] + dx[:, :, None] * s  # (g, R, S)
-        py = origins[idx, 1, None, None] + dy[:, :, None] * s
-        ix = np.floor(px).astype(np.intp)
-        iy = np.floor(py).astype(np.intp)
-        inside = (ix >= 0) & (ix < nx_) & (iy >= 0) & (iy < ny_)
-        ixc = np.clip(ix, 0, nx_ - 1)
-        iyc = np.clip(iy, 0, ny_ - 1)
-        block = occupied[ixc, iyc] | ~inside
-        # samples up to and including the first blocking one
-        seen = np.cumsum(block, axis=2) - block < 1
-        seen &= inside
-        flat = ixc * ny_ + iyc
-        for g, i in enumerate(idx):
-            result[i] = flat[g][seen[g]]
+        # origins in chunks of at most _CHUNK samples (rays x steps x origins) per array,
+        # so that scanning for a large team does not hold gigabytes at once
+        same = np.flatnonzero(fovs == fov)
+        per_chunk = max(1, _CHUNK // max(n_rays * len(s), 1))
+        for start in range(0, len(same), per_chunk):
+            idx = same[start : start + per_chunk]
+            _scan(occupied, origins, headings, idx, rel, s, result)
     return result
+
+
+_CHUNK = 2_000_000
+
+
+def _scan(
+    occupied: np.ndarray,
+    origins: np.ndarray,
+    headings: np.ndarray,
+    idx: np.ndarray,
+    rel: np.ndarray,
+    s: np.ndarray,
+    result: list[np.ndarray],
+) -> None:
+    """Rays at angles ``rel`` from the origins ``idx``, sampled at ``s``, into ``result``."""
+    nx_, ny_ = occupied.shape
+    ang = headings[idx, None] + rel[None, :]  # (g, R)
+    dx, dy = np.cos(ang), np.sin(ang)
+    px = origins[idx, 0, None, None] + dx[:, :, None] * s  # (g, R, S)
+    py = origins[idx, 1, None, None] + dy[:, :, None] * s
+    ix = np.floor(px).astype(np.intp)
+    iy = np.floor(py).astype(np.intp)
+    inside = (ix >= 0) & (ix < nx_) & (iy >= 0) & (iy < ny_)
+    ixc = np.clip(ix, 0, nx_ - 1)
+    iyc = np.clip(iy, 0, ny_ - 1)
+    block = occupied[ixc, iyc] | ~inside
+    # samples up to and including the first blocking one
+    seen = np.cumsum(block, axis=2) - block < 1
+    seen &= inside
+    flat = ixc * ny_ + iyc
+    for g, i in enumerate(idx):
+        result[i] = flat[g][seen[g]]
 
 
 @dataclass

@@ -47,12 +47,26 @@ class SensorModel:
     noise: NoiseKind = "uniform"
 
     def __post_init__(self) -> None:
+        for name in ("range_m", "body_radius_m", "radial_error_m", "angular_error_rad"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+                raise TypeError(f"{name} must be a number (got {type(value).__name__} {value!r})")
+            if not np.isfinite(value):
+                raise ValueError(f"{name} must be finite (got {value!r})")
         if not self.range_m > 0:
-            raise ValueError("range_m must be > 0")
+            raise ValueError(f"range_m must be > 0 (got {self.range_m!r})")
         if self.body_radius_m < 0 or self.radial_error_m < 0 or self.angular_error_rad < 0:
             raise ValueError("body radius and error bounds must be >= 0")
         if self.radial_error_m >= self.range_m:
             raise ValueError("radial_error_m must be smaller than range_m")
+        if self.angular_error_rad >= np.pi / 2:
+            raise ValueError(
+                f"angular_error_rad must be below pi/2 (got {self.angular_error_rad!r})"
+            )
+        if self.noise not in ("none", "uniform", "bound"):
+            raise ValueError(f"noise must be 'none', 'uniform' or 'bound' (got {self.noise!r})")
+        if not isinstance(self.occlusion, bool | np.bool_):
+            raise TypeError(f"occlusion must be True or False (got {self.occlusion!r})")
 
 
 @dataclass

@@ -12,9 +12,9 @@ import importlib
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, Field, model_validator
 
-from tether.config import Scenario
+from tether.config import MAX_LENGTH_M, Coordinate, Scenario, finite_strict
 from tether.errors import ScenarioError
 from tether.paths.trajectory import Polyline, TimeFunction
 from tether.registry import STRATEGIES
@@ -27,14 +27,14 @@ from tether.world.world import World
 class TrajectoryParams(BaseModel):
     """Leader trajectory: ``waypoints`` at ``speed_mps``, or a Python function of time."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = finite_strict()
     kind: Literal["waypoints", "function"] = "waypoints"
-    waypoints: list[list[float]] | None = None
-    speed_mps: float = Field(default=1.0, gt=0)
+    waypoints: list[list[Coordinate]] | None = None
+    speed_mps: float = Field(default=1.0, gt=0, le=MAX_LENGTH_M)
     function: str | None = Field(
         default=None, description="'package.module:callable' mapping t_s -> position"
     )
-    goal_tolerance_m: float = Field(default=0.5, gt=0)
+    goal_tolerance_m: float = Field(default=0.5, gt=0, le=MAX_LENGTH_M)
 
     @model_validator(mode="after")
     def _complete(self) -> TrajectoryParams:
@@ -48,17 +48,19 @@ class TrajectoryParams(BaseModel):
 class SilentParams(BaseModel):
     """Parameters of the non-communicating strategy (paper section V defaults)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = finite_strict()
     cost: Literal["desired_distance", "farthest"] = "desired_distance"
-    d0_m: float = Field(default=11.0, gt=0, description="desired distance d0 of cost (13)")
+    d0_m: float = Field(
+        default=11.0, gt=0, le=MAX_LENGTH_M, description="desired distance d0 of cost (13)"
+    )
     gamma: float = Field(default=0.2, gt=0, description="gain of the gradient step (14)")
     leader: int | None = Field(
         default=None,
         description="index of the leader R_N (default: the robot nearest the trajectory's start)",
     )
     trajectory: TrajectoryParams
-    max_speed_mps: float | None = Field(default=None, gt=0)
-    min_separation_m: float = Field(default=0.0, ge=0)
+    max_speed_mps: float | None = Field(default=None, gt=0, le=MAX_LENGTH_M)
+    min_separation_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
     search_directions: bool = Field(
         default=True,
         description="if the desired direction is blocked, also try heading at each sensed "
@@ -78,6 +80,41 @@ def _load_function(spec: str) -> TimeFunction:
     if not callable(fn):
         raise TypeError(f"{spec} is not callable")
     return fn
+
+
+def _number(name: str, value: Any, *, lo: float = 0.0, strict: bool = True) -> None:
+    """``value`` must be a real finite number above ``lo`` (or at least ``lo``)."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise TypeError(f"{name} must be a number (got {type(value).__name__} {value!r})")
+    if not np.isfinite(value) or (value <= lo if strict else value < lo):
+        bound = f"> {lo:g}" if strict else f">= {lo:g}"
+        raise ValueError(f"{name} must be a finite number {bound} (got {value!r})")
+
+
+def _check_args(**kw: Any) -> None:
+    """The arguments of :class:`SilentStrategy`, checked up front with a clear message."""
+    for name in ("d_max_m", "d0_m", "gamma", "speed_mps", "goal_tolerance_m"):
+        _number(name, kw[name])
+    for name in ("radial_error_m", "angular_error_rad", "min_separation_m"):
+        _number(name, kw[name], strict=False)
+    if kw["max_speed_mps"] is not None:
+        _number("max_speed_mps", kw["max_speed_mps"])
+    if kw["radial_error_m"] >= kw["d_max_m"]:
+        raise ValueError("radial_error_m must be smaller than d_max_m")
+    if kw["angular_error_rad"] >= np.pi / 2:
+        raise ValueError(f"angular_error_rad must be below pi/2 (got {kw['angular_error_rad']!r})")
+    if kw["cost"] not in ("desired_distance", "farthest"):
+        raise ValueError(f"cost must be 'desired_distance' or 'farthest' (got {kw['cost']!r})")
+    leader = kw["leader"]
+    if leader is not None and (
+        isinstance(leader, bool) or not isinstance(leader, int | np.integer)
+    ):
+        raise TypeError(f"leader must be a robot index or None (got {leader!r})")
+    if not isinstance(kw["trajectory"], Polyline) and not callable(kw["trajectory"]):
+        raise TypeError(
+            "trajectory must be a Polyline or a function of time "
+            f"(got {type(kw['trajectory']).__name__})"
+        )
 
 
 @STRATEGIES.register("silent")
@@ -105,6 +142,20 @@ class SilentStrategy(Strategy):
         search_directions: bool = True,
     ) -> None:
         super().__init__()
+        _check_args(
+            d_max_m=d_max_m,
+            trajectory=trajectory,
+            leader=leader,
+            cost=cost,
+            d0_m=d0_m,
+            gamma=gamma,
+            radial_error_m=radial_error_m,
+            angular_error_rad=angular_error_rad,
+            speed_mps=speed_mps,
+            max_speed_mps=max_speed_mps,
+            min_separation_m=min_separation_m,
+            goal_tolerance_m=goal_tolerance_m,
+        )
         self.d_max_m = d_max_m
         self.trajectory = trajectory
         self.leader_arg = leader
@@ -149,6 +200,7 @@ class SilentStrategy(Strategy):
                     f"{src}: {field}.function: cannot load {traj.function!r} ({exc}); "
                     "expected 'package.module:callable'"
                 ) from None
+            _check_time_function(path, world.dim, src, f"{field}.function")
         n = initial.n
         if params.leader is not None and not -n <= params.leader < n:
             raise ScenarioError(
@@ -284,6 +336,21 @@ class SilentStrategy(Strategy):
             out["path_length_m"] = self.trajectory.length_m
             out["path_progress"] = self.progress_m / max(self.trajectory.length_m, 1e-12)
         return out
+
+
+def _check_time_function(fn: TimeFunction, dim: int, source: str, field: str) -> None:
+    """The leader's function of time must give a finite point of ``dim`` coordinates."""
+    try:
+        point = np.asarray(fn(0.0), dtype=float)
+    except Exception as exc:  # the user's function: any failure is a problem of the input
+        raise ScenarioError(
+            f"{source}: {field}: calling it at t = 0 s raised {type(exc).__name__}: {exc}"
+        ) from None
+    if point.shape != (dim,) or not np.isfinite(point).all():
+        raise ScenarioError(
+            f"{source}: {field}: must return {dim} finite coordinates for a time in seconds "
+            f"(at t = 0 s it gave {point.tolist()})"
+        )
 
 
 def check_path_clear(path: Polyline, world: World, source: str, field: str) -> None:

@@ -19,6 +19,10 @@ from scipy import ndimage
 
 from tether.world.los import segment_free
 
+#: the most cells a grid (a scene, a map image, rasterised points) may have: 50 million
+#: cells are 50 MB as booleans and some 400 MB for each float layer derived from them
+MAX_CELLS = 50_000_000
+
 
 @dataclass(eq=False)
 class OccupancyGrid:
@@ -165,7 +169,13 @@ class OccupancyGrid:
     ) -> OccupancyGrid:
         """Rasterise an obstacle point set into a grid covering ``bounds_m`` (``(2, dim)``)."""
         bounds_m = np.asarray(bounds_m, dtype=float)
-        shape = np.maximum(np.ceil((bounds_m[1] - bounds_m[0]) / resolution_m), 1).astype(int)
+        extent = np.maximum(np.ceil((bounds_m[1] - bounds_m[0]) / resolution_m), 1)
+        if not np.isfinite(extent).all() or float(np.prod(extent)) > MAX_CELLS:
+            raise ValueError(
+                f"a grid of {' x '.join(f'{e:.3g}' for e in extent)} cells is more than "
+                f"{MAX_CELLS:,}; raise resolution_m or shrink the bounds"
+            )
+        shape = extent.astype(int)
         occ = np.zeros(tuple(shape), dtype=bool)
         grid = cls(occ, resolution_m, bounds_m[0])
         points = np.asarray(points, dtype=float).reshape(-1, len(shape))

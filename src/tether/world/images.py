@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from tether.errors import MapError
+from tether.world.grid import MAX_CELLS
 
 _IMAGE_HINT = "not a readable PNG/PGM image"
 
@@ -80,6 +81,8 @@ def _check_header(width: int, height: int, maxval: int) -> None:
         raise ValueError(f"PGM size must be positive (got {width} x {height})")
     if not 0 < maxval < 65536:
         raise ValueError(f"PGM maxval must be in 1..65535 (got {maxval})")
+    if width * height > MAX_CELLS:
+        raise ValueError(f"{width} x {height} pixels are more than {MAX_CELLS:,}")
 
 
 def _read_pillow(path: Path) -> tuple[np.ndarray, int]:
@@ -88,6 +91,11 @@ def _read_pillow(path: Path) -> tuple[np.ndarray, int]:
 
     try:
         with Image.open(path) as image:
+            width, height = image.size
+            if width * height > MAX_CELLS:
+                raise ValueError(
+                    f"{width} x {height} pixels are more than {MAX_CELLS:,}; scale the map down"
+                )
             image.load()
             mode = image.mode
             if mode == "1":
@@ -98,6 +106,8 @@ def _read_pillow(path: Path) -> tuple[np.ndarray, int]:
             mode = image.mode
     except UnidentifiedImageError:
         raise ValueError("cannot identify image file") from None
+    except Image.DecompressionBombError as exc:
+        raise ValueError(str(exc)) from None
     except (OSError, SyntaxError) as exc:
         raise ValueError(str(exc) or type(exc).__name__) from None
     if mode == "F":

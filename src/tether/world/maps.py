@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from tether.config import MAX_LENGTH_M
 from tether.errors import MapError
 from tether.world.grid import OccupancyGrid
 from tether.world.images import read_image
@@ -144,6 +145,10 @@ def _origin(source: Path, name: str, value: Any) -> np.ndarray:
     if not isinstance(values, (list, tuple)) or len(values) not in (2, 3):
         raise MapError.at(source, name, f"must be a list [x, y, yaw] of numbers (got {value!r})")
     numbers = [_number(source, name, v) for v in values]
+    if max(abs(v) for v in numbers[:2]) > MAX_LENGTH_M:
+        raise MapError.at(
+            source, name, f"must be within +-{MAX_LENGTH_M:g} m (got {numbers[:2]!r})"
+        )
     if len(numbers) == 3 and numbers[2] != 0.0:
         raise MapError.at(
             source,

@@ -105,7 +105,7 @@ def town(
     setback_m = check_number("town", "setback_m", setback_m, 0.0, float("inf"))
     empty_lot_p = check_number("town", "empty_lot_p", empty_lot_p, 0.0, 1.0)
     check_common("town", dim, point_spacing_m, slice_height_m)
-    occupied = np.zeros(cells_of(np.append(size, height), res), dtype=bool)
+    occupied = np.zeros(cells_of(np.append(size, height), res, "town"), dtype=bool)
     buildings: list[list[float]] = []
     lot_m = 0.5 * blocks[0]
     for x0, x1 in _partition(size[0], blocks, streets, rng):
@@ -194,7 +194,7 @@ def office(
             f"scene 'office': size_m/corridor_m/room_m: rooms too small for {door} m doors "
             f"(room depth {depth:.2f} m, min room width {rooms_range[0]} m)"
         )
-    occupied = np.zeros(cells_of(np.append(size, height), res), dtype=bool)
+    occupied = np.zeros(cells_of(np.append(size, height), res, "office"), dtype=bool)
     full = (0.0, height)
     # outer walls
     for lo, hi in (

@@ -14,7 +14,7 @@ import numpy as np
 from scipy import ndimage
 
 from tether.errors import ScenarioError
-from tether.world.grid import OccupancyGrid
+from tether.world.grid import MAX_CELLS, OccupancyGrid
 from tether.world.world import World
 
 # Sizes of the continuous-connectivity paper's environments (Sec. 4.1):
@@ -24,13 +24,22 @@ OFFICE_SIZE_M = (10.0, 15.0)
 
 
 def check_positive(scene: str, name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not 0 < value < float("inf")
+    ):
         raise ScenarioError(f"scene {scene!r}: {name}: must be a positive number (got {value!r})")
     return float(value)
 
 
 def check_number(scene: str, name: str, value: Any, lo: float, hi: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not lo <= value <= hi
+        or not np.isfinite(value)
+    ):
         raise ScenarioError(
             f"scene {scene!r}: {name}: must be a number in [{lo}, {hi}] (got {value!r})"
         )
@@ -78,8 +87,16 @@ def floats(value: Any) -> np.ndarray | None:
     return array if np.isfinite(array).all() else None
 
 
-def cells_of(size_m: np.ndarray, resolution_m: float) -> tuple[int, ...]:
-    return tuple(int(n) for n in np.maximum(np.round(size_m / resolution_m), 1))
+def cells_of(size_m: np.ndarray, resolution_m: float, scene: str = "scene") -> tuple[int, ...]:
+    """Grid shape of a box ``size_m`` at ``resolution_m``; refused beyond ``MAX_CELLS`` cells."""
+    cells = np.maximum(np.round(np.asarray(size_m, dtype=float) / resolution_m), 1)
+    if not np.isfinite(cells).all() or float(np.prod(cells)) > MAX_CELLS:
+        raise ScenarioError(
+            f"scene {scene!r}: resolution_m: {resolution_m:g} m over {np.asarray(size_m).tolist()} "
+            f"m gives {float(np.prod(cells)):.3g} cells, more than {MAX_CELLS:,}; raise "
+            "resolution_m or shrink the scene"
+        )
+    return tuple(int(n) for n in cells)
 
 
 def raster_box(occupied: np.ndarray, resolution_m: float, lo: Sequence, hi: Sequence, value: bool):

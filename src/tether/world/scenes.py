@@ -96,7 +96,7 @@ def empty(
     size = check_size("empty", "size_m", size_m, 2)
     height = check_positive("empty", "height_m", height_m)
     res = check_positive("empty", "resolution_m", resolution_m)
-    shape = cells_of(np.append(size, height), res)
+    shape = cells_of(np.append(size, height), res, "empty")
     grid = OccupancyGrid(np.zeros(shape, dtype=bool), res, np.zeros(3))
     return World(dim=3, grid=grid, obstacle_points=np.empty((0, 3)), name="empty")
 
@@ -159,7 +159,10 @@ def user_points(
                 f"{path}: bounds_m: must be [[lower corner], [upper corner]] with {dim} "
                 f"numbers each (the file's points are {dim}-D), upper > lower (got {bounds_m!r})"
             )
-    grid = OccupancyGrid.from_points(points, bounds, res)
+    try:
+        grid = OccupancyGrid.from_points(points, bounds, res)
+    except ValueError as exc:
+        raise MapError(f"{path}: resolution_m: {exc}") from None
     keep = grid.inside(grid.to_cell(points))
     if not keep.any():
         raise MapError(
@@ -203,6 +206,19 @@ def make_scene(name: str, rng: np.random.Generator | int | None = None, **params
         raise ScenarioError(
             f"scene {name!r}: unknown parameter(s) {', '.join(unknown)}; "
             f"accepted: {', '.join(accepted + ['seed'])}"
+        )
+    required = [
+        p.name
+        for p in inspect.signature(factory).parameters.values()
+        if p.default is inspect.Parameter.empty
+        and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
+        and p.name != "rng"
+    ]
+    missing = [p for p in required if p not in params]
+    if missing:
+        raise ScenarioError(
+            f"scene {name!r}: missing parameter(s) {', '.join(missing)}; "
+            f"e.g. world.params.{missing[0]}"
         )
     return factory(np.random.default_rng(rng), **params)
 
