@@ -8,6 +8,8 @@ Layers are those of ``docs/architecture.md``.
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import networkx as nx
@@ -140,3 +142,20 @@ def test_the_walker_sees_function_level_and_relative_imports(
         assert imports_of("tether.a", pkg / "a.py", known) == expect
     finally:
         SRC = old
+
+
+def test_a_run_without_figures_does_not_import_matplotlib() -> None:
+    """Start-up: the runner, the CLI and every built-in plug-in load without matplotlib.
+
+    Importing it costs about a second on every ``tether run``; it is imported by
+    :func:`tether.viz.plots.pyplot` when the first figure is drawn.
+    """
+    code = (
+        "import sys, tether.cli, tether.runner, tether.plugins\n"
+        "tether.plugins.load_builtins()\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] == 'matplotlib'))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=SRC
+    )
+    assert out.stdout.strip() == "[]"

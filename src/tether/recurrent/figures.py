@@ -6,13 +6,13 @@ from typing import Any
 
 import numpy as np
 
-from tether.viz.plots import plt
+from tether.viz.plots import pyplot
 from tether.world.grid import OccupancyGrid
 
 
 def explored_over_time(t_s: np.ndarray, explored: np.ndarray, n_connected: np.ndarray) -> Any:
     """Explored fraction known at the BS and robots connected to it, against time."""
-    fig, ax = plt.subplots(figsize=(6, 3.5))
+    fig, ax = pyplot().subplots(figsize=(6, 3.5))
     ax.plot(t_s, 100 * explored, label="explored (known at BS)")
     ax2 = ax.twinx()
     ax2.plot(t_s, n_connected, color="tab:orange", lw=0.8, alpha=0.6)
@@ -32,7 +32,7 @@ def known_map(
     img[known & ~grid.occupied] = 1.0
     img[known & grid.occupied] = 0.0
     (x0, y0), (x1, y1) = grid.bounds_m
-    fig, ax = plt.subplots(figsize=(7, 7 * grid.shape[1] / max(grid.shape[0], 1)))
+    fig, ax = pyplot().subplots(figsize=(7, 7 * grid.shape[1] / max(grid.shape[0], 1)))
     ax.imshow(img.T, origin="lower", cmap="gray", vmin=0, vmax=1, interpolation="nearest",
               extent=(x0, x1, y0, y1))  # fmt: skip
     for r in range(trails_m.shape[1]):

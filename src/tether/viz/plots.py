@@ -1,15 +1,31 @@
-"""Static figures of a run: links over time and snapshots of the team."""
+"""Static figures of a run: links over time and snapshots of the team.
+
+Matplotlib is imported on the first figure drawn, not with this module: importing
+it costs about a second, and every run imports this module (through the runner
+and the strategies' ``figures`` hooks) while a run without figures draws none.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+import functools
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+@functools.cache
+def pyplot() -> ModuleType:
+    """``matplotlib.pyplot`` on the non-interactive Agg backend, imported on first use."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
 
 
 def series_over_time(
@@ -19,7 +35,7 @@ def series_over_time(
     reference: tuple[float, str] | None = None,
 ) -> Figure:
     """One line per labelled ``(x, y)`` series, with an optional horizontal reference."""
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    fig, ax = pyplot().subplots(figsize=(6.4, 3.6))
     for label, (x, y) in series.items():
         ax.plot(x, y, label=label)
     if reference is not None:
@@ -50,7 +66,7 @@ def snapshot(
 ) -> Figure:
     """Team positions with their links at a few instants (the paper's Fig. 4)."""
     k = len(positions)
-    fig, axes = plt.subplots(1, k, figsize=(4.0 * k, 4.0), squeeze=False)
+    fig, axes = pyplot().subplots(1, k, figsize=(4.0 * k, 4.0), squeeze=False)
     all_pts = np.concatenate(positions + ([path] if path is not None else []))
     lo, hi = all_pts[:, :2].min(axis=0), all_pts[:, :2].max(axis=0)
     pad = 0.05 * max(float(np.max(hi - lo)), 1.0)
