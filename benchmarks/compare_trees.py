@@ -29,6 +29,12 @@ Benchmarks:
 
 Every subprocess records the 1-minute load average before and after it and its CPU
 time (user + system), so that a comparison made while other jobs run can be judged.
+With ``--clock cpu`` the scripts run with ``time.perf_counter`` replaced by
+``time.process_time`` (both trees' benchmarks and simulators time themselves with
+``time.perf_counter()``), so every row is CPU time of the process instead of wall
+time: less sensitive to other jobs on the machine (not immune: they share caches
+and memory bandwidth), and blind to time spent waiting (there is none in these
+single-process benchmarks). For ``run``, the headline is then the process's CPU time.
 Results go to ``benchmarks/results/compare_refactor.json`` (one section per
 benchmark, merged into the file if it exists) with the machine and both git hashes.
 
@@ -65,6 +71,14 @@ KEYS = {
     "run": ("scenario",),
 }
 HEADLINE = {"exploration": "wall_time_s", "continuous_step": "step_s", "run": "e2e_s"}
+# Run a script with time.perf_counter measuring the process's CPU time (--clock cpu).
+CPU_CLOCK = (
+    "import os, runpy, sys, time\n"
+    "time.perf_counter = time.process_time\n"
+    "sys.argv = sys.argv[1:]\n"
+    "sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))\n"
+    "runpy.run_path(sys.argv[0], run_name='__main__')\n"
+)
 # Values that must agree between the trees for the rows to be the same problem.
 SAME = {
     "exploration": ("plans", "final_explored_fraction"),
@@ -130,19 +144,20 @@ def timed_process(cmd: list[str], env: dict[str, str], cwd: Path, log: Path) -> 
 
 
 def bench_script(
-    name: str, root: Path, args: list[str], tmp: Path, tag: str
+    name: str, root: Path, args: list[str], tmp: Path, tag: str, clock: str = "wall"
 ) -> tuple[list[dict], dict]:
     """Run ``<root>/benchmarks/bench_<name>.py args`` once; its result rows and process stats."""
     script = root / "benchmarks" / f"bench_{name}.py"
     out = tmp / f"{tag}.json"
+    python = [sys.executable] if clock == "wall" else [sys.executable, "-c", CPU_CLOCK]
     if supports(script, "--out", root):
-        cmd = [sys.executable, str(script), *args, "--out", str(out)]
+        cmd = [*python, str(script), *args, "--out", str(out)]
         cwd = root
     else:  # writes results/<name>.json beside itself: run a copy, read it there
         copy_dir = tmp / f"{tag}_script"
         copy_dir.mkdir()
         shutil.copy2(script, copy_dir / script.name)
-        cmd = [sys.executable, str(copy_dir / script.name), *args]
+        cmd = [*python, str(copy_dir / script.name), *args]
         cwd = copy_dir
         out = copy_dir / "results" / f"{name}.json"
     proc = timed_process(cmd, tree_env(root), cwd, tmp / f"{tag}.log")
@@ -234,9 +249,13 @@ def combine(name: str, runs: dict[str, list[list[dict]]]) -> list[dict]:
     return matched
 
 
-def table(name: str, rows: list[dict]) -> str:
+def headline(name: str, clock: str) -> str:
+    return "e2e_cpu_s" if name == "run" and clock == "cpu" else HEADLINE[name]
+
+
+def table(name: str, rows: list[dict], head: str) -> str:
     """Text table: headline timing old / new medians and ratio, and the ratios of its parts."""
-    keys, head = KEYS[name], HEADLINE[name]
+    keys = KEYS[name]
     parts = {
         "exploration": ["split_move_s", "split_sense_s", "split_comm_s", "split_strategy_s"],
         "continuous_step": ["weights_s", "eigen_s", "estimator_s", "gradient_s"],
@@ -284,7 +303,7 @@ def compare(name: str, old: Path, new: Path, pairs: int, args: argparse.Namespac
                 if name == "run":
                     rows, proc = run_scenarios(trees[side], bench_args, tmp, tag)
                 else:
-                    rows, proc = bench_script(name, trees[side], bench_args, tmp, tag)
+                    rows, proc = bench_script(name, trees[side], bench_args, tmp, tag, args.clock)
                 runs[side].append(rows)
                 procs[side].append(proc)
                 print(
@@ -293,6 +312,7 @@ def compare(name: str, old: Path, new: Path, pairs: int, args: argparse.Namespac
                     flush=True,
                 )
     rows = combine(name, runs)
+    head = headline(name, args.clock)
     loads = [p[k] for side in procs.values() for p in side for k in ("load_before", "load_after")]
     section = {
         "benchmark": name,
@@ -301,6 +321,8 @@ def compare(name: str, old: Path, new: Path, pairs: int, args: argparse.Namespac
         "order": "interleaved pairs, first of each pair alternating: old new, new old, ...",
         "ratio": "new median / old median (above 1: new is slower)",
         "threshold": THRESHOLD,
+        "clock": args.clock,
+        "headline": head,
         "duration_s": round(time.perf_counter() - t_start, 1),
         "load_average_1min": {
             "min": min(loads),
@@ -318,12 +340,12 @@ def compare(name: str, old: Path, new: Path, pairs: int, args: argparse.Namespac
         "slower_rows": [
             {k: r[k] for k in KEYS[name]}
             for r in rows
-            if r[HEADLINE[name]]["ratio"] and r[HEADLINE[name]]["ratio"] > THRESHOLD
+            if r[head]["ratio"] and r[head]["ratio"] > THRESHOLD
         ],
         "rows": rows,
     }
     pm = section["process_median"]
-    print(table(name, rows))
+    print(table(name, rows, head))
     print(
         f"whole process, median: old {pm['old']['wall_s']:.1f} s ({pm['old']['cpu_s']:.1f} s CPU), "
         f"new {pm['new']['wall_s']:.1f} s ({pm['new']['cpu_s']:.1f} s CPU); "
@@ -343,7 +365,15 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--quick", action="store_true", help="continuous_step --quick")
     ap.add_argument("--scenarios", nargs="+", default=RUN_SCENARIOS, help="for run")
     ap.add_argument("--out", type=Path, default=OUT)
-    ap.add_argument("--section", help="key of the result in the JSON (default: the benchmark)")
+    ap.add_argument(
+        "--clock",
+        choices=["wall", "cpu"],
+        default="wall",
+        help="what the scripts' time.perf_counter measures (cpu: the process's CPU time)",
+    )
+    ap.add_argument(
+        "--section", help="key of the result in the JSON (default: the benchmark, +_cpu)"
+    )
     a = ap.parse_args(argv)
     old, new = a.old_root.resolve(), a.new_root.resolve()
     for root in (old, new):
@@ -368,7 +398,8 @@ def main(argv: list[str] | None = None) -> dict:
         section = compare(name, old, new, pairs, a)
         section["old"], section["new"] = result["old"], result["new"]
         section["machine"] = result["machine"]
-        result["benchmarks"][a.section or name] = section
+        key = a.section or (name if a.clock == "wall" else f"{name}_{a.clock}")
+        result["benchmarks"][key] = section
         a.out.parent.mkdir(parents=True, exist_ok=True)
         a.out.write_text(json.dumps(result, indent=1) + "\n")
         print(f"wrote {a.out}")
