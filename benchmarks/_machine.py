@@ -1,7 +1,7 @@
-"""Machine description recorded with every benchmark result (see tether.record.machine)."""
+"""Machine description recorded with every benchmark result (see tether.runfolder.machine)."""
 
 from __future__ import annotations
 
-from tether.record import machine
+from tether.runfolder import machine
 
 __all__ = ["machine"]

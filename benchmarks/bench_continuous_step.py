@@ -17,9 +17,9 @@ configuration is the next step's weights + eigenpair, so it is included.
 
 Usage::
 
-    python benchmarks/bench_continuous_step.py [--quick]
+    python benchmarks/bench_continuous_step.py [--quick] [--out PATH]
 
-Writes ``benchmarks/results/continuous_step.json``.
+Writes ``benchmarks/results/continuous_step.json`` (or ``--out``).
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from tether.continuous.gradient import connectivity_force, messages
 from tether.continuous.placement import safe_team  # noqa: E402
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
 from tether.continuous.weights import compute_weights
-from tether.record import machine  # noqa: E402
+from tether.runfolder import machine  # noqa: E402
 from tether.world.clearance import ObstacleIndex
 from tether.world.scenes import make_scene  # noqa: E402
 from tether.world.world import World  # noqa: E402
@@ -136,7 +136,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats, no N >= 1000")
     parser.add_argument("--only", help="comma-separated world names (default: all)")
+    parser.add_argument("--out", type=Path, default=OUT, help=f"JSON file (default: {OUT})")
     args = parser.parse_args()
+    out = args.out
     sizes = [10, 35, 100] if args.quick else [10, 35, 100, 1000, 10_000]
     worlds = {
         "free": World(dim=3, bounds_m=np.array([[0.0, 0, 0], [200.0, 200.0, 10.0]]), name="free"),
@@ -170,8 +172,8 @@ def main() -> None:
                     f"eig/est={row.get('eigen_s', row.get('estimator_s')) * 1e6:9.1f}us "
                     f"gradient={row['gradient_s'] * 1e6:8.1f}us step={row['step_s'] * 1e6:9.1f}us"
                 )
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(
         json.dumps(
             {
                 "benchmark": "continuous_step",
@@ -183,7 +185,7 @@ def main() -> None:
             indent=2,
         )
     )
-    print(f"wrote {OUT}")
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":

@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-from tether.record import machine
 from tether.recurrent.baseline_utility import UtilityStrategy
 from tether.recurrent.exploration.run import run_exploration
 from tether.recurrent.exploration.sim import ExplorationConfig, random_base
 from tether.recurrent.replanning import RecurrentStrategy
+from tether.runfolder import machine
 
 ROOT = Path(__file__).resolve().parents[1]
 MAPS = ROOT / ".." / "shared" / "maps"

@@ -1,6 +1,6 @@
 """Time of the path layer (continuous-connectivity paper, Sec. 3.2): A*, planning, smoothing.
 
-Measures, on one machine (recorded with :func:`tether.record.machine`):
+Measures, on one machine (recorded with :func:`tether.runfolder.machine`):
 
 * ``astar_town_like``: :func:`tether.paths.astar.astar_grid` on 100 x 100 x 20 grids with
   random box buildings on a street grid (about 20 % of the cells, 30 % of the ground layer),
@@ -29,7 +29,7 @@ import numpy as np
 from tether.paths.astar import astar_grid, plan_path, planning_grid
 from tether.paths.bspline import closest_point, smooth_path
 from tether.paths.virtual_point import virtual_state
-from tether.record import machine
+from tether.runfolder import machine
 from tether.world import free_positions, make_scene
 
 SHAPE = (100, 100, 20)

@@ -92,3 +92,17 @@ def test_stretch_on_hand_made_graphs():
     complete = np.array(list(itertools.combinations(range(4), 2)))
     assert stretch(square, complete) == pytest.approx(1.0)
     assert stretch(square, cycle[:2]) == float("inf")
+
+
+@pytest.mark.parametrize("method", ["auto", "dense", "subset", "sparse", "warm"])
+def test_disconnected_graph_is_exactly_zero_on_every_solver(method: str) -> None:
+    """Two paths of 10 nodes: lambda2 exactly 0 and the component indicator, with or
+    without a warm start (one near the indicator, which the warm solver may certify)."""
+    pairs = np.array([[i, i + 1] for i in range(9)] + [[i, i + 1] for i in range(10, 19)])
+    indicator = np.r_[np.ones(10), -np.ones(10)] / np.sqrt(20)
+    rng = np.random.default_rng(0)
+    guesses = [indicator + 1e-3 * rng.normal(size=20), rng.normal(size=20)]
+    for guess in guesses if method == "warm" else [None, *guesses]:
+        lam, vec = fiedler(20, pairs, np.full(18, 0.5), method=method, guess=guess)
+        assert lam == 0.0
+        assert abs(float(vec @ indicator)) == pytest.approx(1.0, abs=1e-12)

@@ -27,15 +27,13 @@ SUBSET_MAX_N = 400  # "auto": only the second eigenpair (LAPACK syevr) up to thi
 _TINY_REL = 1e-9
 
 
-def _dense(n: int, pairs: np.ndarray, w: np.ndarray | None) -> tuple[float, np.ndarray]:
-    vals, vecs = np.linalg.eigh(laplacian_dense(n, pairs, w))
+def _dense(lap: np.ndarray) -> tuple[float, np.ndarray]:
+    vals, vecs = np.linalg.eigh(lap)
     return max(float(vals[1]), 0.0), vecs[:, 1]
 
 
-def _subset(n: int, pairs: np.ndarray, w: np.ndarray | None) -> tuple[float, np.ndarray]:
-    vals, vecs = scipy.linalg.eigh(
-        laplacian_dense(n, pairs, w), subset_by_index=[1, 1], driver="evr", check_finite=False
-    )
+def _subset(lap: np.ndarray) -> tuple[float, np.ndarray]:
+    vals, vecs = scipy.linalg.eigh(lap, subset_by_index=[1, 1], driver="evr", check_finite=False)
     return max(float(vals[0]), 0.0), vecs[:, 0]
 
 
@@ -109,25 +107,34 @@ def fiedler(
             method = "subset"
         else:
             method = "warm" if guess is not None else "sparse"
-    if method in ("sparse", "warm"):
-        vec = _component_vector(n, pairs, w)  # the shift-invert solvers need a connected graph
+    warm = None
+    if method == "warm":
+        if guess is None:
+            raise ValueError("method 'warm' needs a guess (a previous Fiedler vector)")
+        # certified, so lambda2 > 0 (a connected graph) unless it is down at rounding level:
+        # the components are checked after it, not before (they cost 10 % of a warm solve)
+        warm = warm_fiedler(n, pairs, w, guess)
+        if warm is None:
+            method = "sparse"
+    if method == "sparse":
+        vec = _component_vector(n, pairs, w)  # shift-invert Lanczos needs a connected graph
         if vec is not None:
             return 0.0, vec
-    if method == "dense":
-        lam, vec = _dense(n, pairs, w)
-    elif method == "subset":
-        lam, vec = _subset(n, pairs, w)
+    scale = None  # the largest degree, for the check of a tiny lambda2
+    if method in ("dense", "subset"):
+        lap = laplacian_dense(n, pairs, w)
+        lam, vec = _dense(lap) if method == "dense" else _subset(lap)
+        scale = float(lap.diagonal().max()) if len(pairs) else 1.0  # the degrees
     elif method == "sparse":
         lam, vec = _sparse(n, pairs, w)
     elif method == "warm":
-        if guess is None:
-            raise ValueError("method 'warm' needs a guess (a previous Fiedler vector)")
-        warm = warm_fiedler(n, pairs, w, guess)
-        lam, vec = warm if warm is not None else _sparse(n, pairs, w)
+        lam, vec = warm
     else:
         raise ValueError(f"unknown method {method!r}; expected auto, dense, subset, sparse or warm")
-    if method in ("dense", "subset") and lam <= _TINY_REL * _max_degree(n, pairs, w):
+    if method != "sparse" and lam <= _TINY_REL * (scale or _max_degree(n, pairs, w)):
         comp = _component_vector(n, pairs, w)
+        if comp is not None and method == "warm":
+            return 0.0, comp  # as "sparse" returns it
         if comp is not None:
             lam, vec = 0.0, comp
     if guess is not None and float(vec @ guess) < 0:
