@@ -1,0 +1,304 @@
+"""Compiled kernels of App. A: pairs, weights, edge energies, gradient (numba, lazy).
+
+The fast paths of :func:`tether.continuous.weights.compute_weights`,
+:func:`tether.continuous.gradient.edge_energy`,
+:func:`tether.continuous.gradient.lambda2_gradient` and
+:func:`tether.continuous.gradient.connectivity_force`, used when
+:func:`tether.jit.enabled`. Each loop does the arithmetic of its numpy reference in the
+same order (``np.add.at`` and ``np.bincount`` accumulate in index order; the norm of a
+row is ``sqrt((x0^2 + x1^2) + x2^2)``; ``scipy.special.expit(x)`` is
+``1 / (1 + exp(-x))``), so both give the same bits; the tests compare them. For a team
+of 35 robots the numpy versions are almost all interpreter and dispatch overhead.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: below this many robots the pairs are found by testing all of them
+BRUTE_MAX_N = 128
+
+
+@njit(cache=True, inline="always")
+def _norm(x):  # noqa: ANN001, ANN202
+    """``numpy.linalg.norm`` of a short row: ``sqrt`` of the squares summed in order."""
+    acc = 0.0
+    for d in range(x.shape[0]):
+        acc += x[d] * x[d]
+    return math.sqrt(acc)
+
+
+@njit(cache=True, inline="always")
+def smooth_step1(x, lo, hi):  # noqa: ANN001, ANN202
+    """``(S(x; lo, hi), dS/dx)`` of :func:`tether.continuous.potential.smooth_step`."""
+    width = hi - lo
+    t = (x - lo) / width
+    if t > 0.0 and t < 1.0:
+        g = 1.0 / t - 1.0 / (1.0 - t)
+        s_in = 1.0 / (1.0 + math.exp(g))  # expit(-g)
+        e_g = 1.0 / (1.0 + math.exp(-g))  # expit(g)
+        ds = s_in * e_g * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
+        return s_in, ds
+    return (1.0 if t >= 1.0 else 0.0), 0.0
+
+
+@njit(cache=True, inline="always")
+def log_derivative1(x, lo, hi):  # noqa: ANN001, ANN202
+    """``S'(x) / S(x)`` of :func:`tether.continuous.potential.smooth_step_log_derivative`."""
+    width = hi - lo
+    t = (x - lo) / width
+    if t > 0.0 and t < 1.0:
+        g = 1.0 / t - 1.0 / (1.0 - t)
+        return 1.0 / (1.0 + math.exp(-g)) * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
+    return 0.0
+
+
+@njit(cache=True)
+def pairs_in_range(q, r):  # noqa: ANN001, ANN201
+    """All pairs ``(i, j)``, ``i < j``, with ``||q_i - q_j|| < r``, in lexicographic order.
+
+    All pairs are tested below ``BRUTE_MAX_N`` robots; above, robots are bucketed in
+    cubes of side ``r`` (sorted cube codes, binary search for the neighbouring cubes)
+    and each robot's partners sorted, ``O(n log n + m)``.
+    """
+    n, dim = q.shape
+    cap = 16 * n + 16
+    out = np.empty((cap, 2), np.int64)
+    m = 0
+    diff = np.empty(dim)
+    if n <= BRUTE_MAX_N:
+        for i in range(n):
+            for j in range(i + 1, n):
+                for d in range(dim):
+                    diff[d] = q[i, d] - q[j, d]
+                if _norm(diff) < r:
+                    if m == len(out):
+                        out = _grow(out)
+                    out[m, 0], out[m, 1] = i, j
+                    m += 1
+        return out[:m].copy()
+    lo = np.empty(dim)
+    for d in range(dim):
+        lo[d] = q[:, d].min()
+    cell = np.empty((n, dim), np.int64)
+    size = np.ones(dim, np.int64)
+    for k in range(n):
+        for d in range(dim):
+            cell[k, d] = int((q[k, d] - lo[d]) / r)
+            size[d] = max(size[d], cell[k, d] + 3)
+    code = np.zeros(n, np.int64)
+    for k in range(n):
+        c = 0
+        for d in range(dim):
+            c = c * size[d] + cell[k, d] + 1
+        code[k] = c
+    order = np.argsort(code, kind="mergesort")
+    sorted_code = code[order]
+    partners = np.empty(n, np.int64)
+    offs = np.empty(dim, np.int64)
+    for i in range(n):
+        cnt = 0
+        for nb in range(3**dim):
+            rest = nb
+            c = 0
+            for d in range(dim):
+                offs[d] = rest % 3 - 1
+                rest //= 3
+            for d in range(dim):
+                c = c * size[d] + cell[i, d] + 1 + offs[d]
+            first = np.searchsorted(sorted_code, c)
+            while first < n and sorted_code[first] == c:
+                j = order[first]
+                first += 1
+                if j <= i:
+                    continue
+                for d in range(dim):
+                    diff[d] = q[i, d] - q[j, d]
+                if _norm(diff) < r:
+                    partners[cnt] = j
+                    cnt += 1
+        partners[:cnt].sort()
+        while m + cnt > len(out):
+            out = _grow(out)
+        for k in range(cnt):
+            out[m, 0], out[m, 1] = i, partners[k]
+            m += 1
+    return out[:m].copy()
+
+
+@njit(cache=True)
+def _grow(out):  # noqa: ANN001, ANN202
+    bigger = np.empty((2 * len(out), 2), np.int64)
+    bigger[: len(out)] = out
+    return bigger
+
+
+@njit(cache=True)
+def pairs_below(q, pairs, r):  # noqa: ANN001, ANN201
+    """The given pairs with ``||q_i - q_j|| < r`` (order kept)."""
+    dim = q.shape[1]
+    keep = np.zeros(len(pairs), np.bool_)
+    diff = np.empty(dim)
+    for k in range(len(pairs)):
+        for d in range(dim):
+            diff[d] = q[pairs[k, 0], d] - q[pairs[k, 1], d]
+        keep[k] = _norm(diff) < r
+    return pairs[keep].copy()
+
+
+@njit(cache=True)
+def weights_kernel(  # noqa: ANN201, PLR0913
+    q, pairs, has_obstacles, clearance, s_star, o_star, rs_inner, rs, ro, ro_outer, rc, rc_outer
+):  # noqa: ANN001
+    """Every array of :class:`tether.continuous.weights.WeightedGraph` for ``pairs``.
+
+    ``pairs`` are within ``Rs``; ``clearance``, ``s_star``, ``o_star`` are the
+    obstacle search's results for them (ignored unless ``has_obstacles``). Returns
+    ``pair_factor, dP_di, dP_dj, clearance, collision, coll_pairs, coll_unit,
+    coll_logd``, each computed as :func:`~tether.continuous.weights.compute_weights`
+    does.
+    """
+    n, dim = q.shape
+    m = len(pairs)
+    d_ = np.empty(m)
+    u = np.empty((m, dim))
+    diff = np.empty(dim)
+    a_fac = np.empty(m)
+    da = np.empty(m)
+    for k in range(m):
+        i, j = pairs[k, 0], pairs[k, 1]
+        for c in range(dim):
+            diff[c] = q[i, c] - q[j, c]
+        dk = _norm(diff)
+        d_[k] = dk
+        den = max(dk, 1e-300)
+        for c in range(dim):
+            u[k, c] = diff[c] / den
+        a_fac[k], da_k = smooth_step1(rs_inner + rs - dk, rs_inner, rs)
+        da[k] = -da_k
+    dP_di = np.empty((m, dim))
+    dP_dj = np.empty((m, dim))
+    b_fac = np.ones(m)
+    clear = np.full(m, np.inf)
+    if has_obstacles:
+        clear = clearance.copy()
+        for k in range(m):
+            i, j = pairs[k, 0], pairs[k, 1]
+            near = np.isfinite(clearance[k])
+            b_fac[k], db = smooth_step1(clearance[k] if near else ro_outer, ro, ro_outer)
+            s = s_star[k]
+            inv = max(clearance[k], 1e-300)
+            for c in range(dim):
+                p_star = q[i, c] + s * (q[j, c] - q[i, c])
+                grad_d = (p_star - o_star[k, c]) / inv if near else 0.0
+                dB_di = (db * (1.0 - s)) * grad_d
+                dB_dj = (db * s) * grad_d
+                dP_di[k, c] = (da[k] * u[k, c]) * b_fac[k] + a_fac[k] * dB_di
+                dP_dj[k, c] = (-da[k] * u[k, c]) * b_fac[k] + a_fac[k] * dB_dj
+    else:
+        for k in range(m):
+            for c in range(dim):
+                dP_di[k, c] = da[k] * u[k, c]
+                dP_dj[k, c] = -dP_di[k, c]
+    pair_factor = np.empty(m)
+    for k in range(m):
+        pair_factor[k] = a_fac[k] * b_fac[k]
+    close = d_ < rc_outer
+    mc = int(close.sum())
+    coll_pairs = np.empty((mc, 2), pairs.dtype)
+    coll_unit = np.empty((mc, dim))
+    coll_logd = np.empty(mc)
+    gamma = np.empty(mc)
+    kc = 0
+    for k in range(m):
+        if close[k]:
+            coll_pairs[kc, 0], coll_pairs[kc, 1] = pairs[k, 0], pairs[k, 1]
+            coll_unit[kc] = u[k]
+            gamma[kc] = smooth_step1(d_[k], rc, rc_outer)[0]
+            coll_logd[kc] = log_derivative1(d_[k], rc, rc_outer)
+            kc += 1
+    # collision_factor: np.add.at over the first column, then over the second
+    logc = np.zeros(n)
+    zero = np.zeros(n, np.bool_)
+    for col in range(2):
+        for k in range(mc):
+            if gamma[k] > 0:
+                logc[coll_pairs[k, col]] += math.log(gamma[k])
+    for k in range(mc):
+        if not gamma[k] > 0:
+            zero[coll_pairs[k, 0]] = True
+            zero[coll_pairs[k, 1]] = True
+    collision = np.empty(n)
+    for r in range(n):
+        collision[r] = 0.0 if zero[r] else math.exp(logc[r])
+    return pair_factor, dP_di, dP_dj, clear, collision, coll_pairs, coll_unit, coll_logd
+
+
+@njit(cache=True)
+def edge_energy_kernel(n, pairs, pair_factor, collision, nu):  # noqa: ANN001, ANN201
+    """``T_i = sum_j W_ij (nu_i - nu_j)^2`` as :func:`~tether.continuous.gradient.edge_energy`."""
+    first = np.zeros(n)
+    second = np.zeros(n)
+    for k in range(len(pairs)):
+        i, j = pairs[k, 0], pairs[k, 1]
+        dn = nu[i] - nu[j]
+        e = pair_factor[k] * collision[i] * collision[j] * (dn * dn)
+        first[i] += e
+    for k in range(len(pairs)):
+        i, j = pairs[k, 0], pairs[k, 1]
+        dn = nu[i] - nu[j]
+        e = pair_factor[k] * collision[i] * collision[j] * (dn * dn)
+        second[j] += e
+    return first + second
+
+
+@njit(cache=True)
+def gradient_kernel(  # noqa: ANN201, PLR0913
+    n, pairs, dP_di, dP_dj, coll_pairs, coll_unit, coll_logd, nu, collision, energy
+):  # noqa: ANN001
+    """``dlambda2/dq`` as :func:`~tether.continuous.gradient.lambda2_gradient`, ``(n, dim)``."""
+    dim = dP_di.shape[1]
+    grad = np.zeros((n, dim))
+    m = len(pairs)
+    cc = np.empty(m)
+    for k in range(m):
+        i, j = pairs[k, 0], pairs[k, 1]
+        dn = nu[i] - nu[j]
+        cc[k] = collision[i] * collision[j] * (dn * dn)
+    for k in range(m):
+        for c in range(dim):
+            grad[pairs[k, 0], c] += dP_di[k, c] * cc[k]
+    for k in range(m):
+        for c in range(dim):
+            grad[pairs[k, 1], c] += dP_dj[k, c] * cc[k]
+    mc = len(coll_pairs)
+    for k in range(mc):
+        coef = coll_logd[k] * (energy[coll_pairs[k, 0]] + energy[coll_pairs[k, 1]])
+        for c in range(dim):
+            grad[coll_pairs[k, 0], c] += coef * coll_unit[k, c]
+    for k in range(mc):
+        coef = coll_logd[k] * (energy[coll_pairs[k, 0]] + energy[coll_pairs[k, 1]])
+        for c in range(dim):
+            grad[coll_pairs[k, 1], c] += -(coef * coll_unit[k, c])
+    return grad
+
+
+@njit(cache=True)
+def force_kernel(grad, lam, lo, hi, gain):  # noqa: ANN001, ANN201
+    """``-dV/dlambda2 * grad`` per robot (:func:`~tether.continuous.gradient.connectivity_force`).
+
+    ``lam`` is each robot's lambda2 ``(n,)``; the slope is
+    :func:`~tether.continuous.potential.potential_slope`.
+    """
+    n, dim = grad.shape
+    out = np.empty((n, dim))
+    for r in range(n):
+        a = max(hi - lam[r], 0.0)
+        b = max(lam[r] - lo, 1e-12)
+        slope = -gain * a * (a + 2.0 * b) / (b * b)
+        for c in range(dim):
+            out[r, c] = -slope * grad[r, c]
+    return out
