@@ -7,7 +7,8 @@ the last bit where the arithmetic is the same). :func:`enabled` decides which on
 
 * ``TETHER_JIT=0`` in the environment, or :func:`set_enabled` (``False``), selects the
   reference (numpy) paths everywhere;
-* otherwise the kernels run when numba is importable.
+* otherwise the kernels run when numba is importable: always on the strategies' own hot
+  paths, and on paths every strategy shares only once numba is loaded (:func:`warm`).
 
 ``numba`` is imported by the kernel modules only, and those only when a kernel is first
 needed, so a run that never reaches one (``silent``, ``recurrent``) does not pay for the
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -30,11 +32,27 @@ def available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
+_default: bool | None = None
+
+
 def enabled() -> bool:
     """The compiled kernels run (see the module docstring)."""
+    global _default
     if _forced is not None:
         return _forced
-    return os.environ.get("TETHER_JIT", "1") != "0" and available()
+    if _default is None:  # decided once per process (hot paths ask at every call)
+        _default = os.environ.get("TETHER_JIT", "1") != "0" and available()
+    return _default
+
+
+def warm() -> bool:
+    """The kernels run and numba is already loaded in this process.
+
+    Paths shared by every strategy (line of sight of the sensing graph, the team's
+    metrics) use their kernel only then: a strategy without kernels (``silent``,
+    ``recurrent``) then never pays numba's start-up (about a second) for them.
+    """
+    return enabled() and "numba" in sys.modules
 
 
 def set_enabled(value: bool | None) -> None:

@@ -39,10 +39,14 @@ def sample_segments(
 
 
 @cache
-def _einsum_order() -> int:
-    from tether.world.clearance_kernels import einsum_order
+def einsum_order() -> int:
+    """1 if ``numpy.einsum("kd,kd->k")`` sums three terms as ``(x0 + x2) + x1``, else 0.
 
-    return einsum_order()
+    numpy's summation order for short rows depends on its SIMD build (two-lane
+    vectors give this one); the kernels that reproduce an einsum follow it.
+    """
+    x = np.array([[1.0, 2.0**-53, -1.0]])
+    return int(np.einsum("kd,kd->k", x, np.ones((1, 3)))[0] != 0.0)
 
 
 class ObstacleIndex:
@@ -111,6 +115,25 @@ class ObstacleIndex:
         cells = np.floor((pts - self.grid.origin_m) / self.grid.resolution_m).astype(np.intp)
         ok = np.all((cells >= 0) & (cells < shape), axis=1)
         return np.where(ok, flat[np.where(ok, cells @ strides, 0)], 0.0)
+
+    def nearest_min(self, points: np.ndarray, below_m: float = np.inf) -> float:
+        """``min_k`` distance from ``points[k]`` to ``O``, where it may be below ``below_m``.
+
+        Exactly ``tree.query(points)[0].min()`` whenever that can be below ``below_m``;
+        ``inf`` when the distance field proves every point at least ``below_m`` (plus
+        1e-9 m for rounding) away, so ``min(below_m, nearest_min(q, below_m))`` always
+        equals ``min(below_m, tree.query(q)[0].min())``. Only the points the field does
+        not settle are searched. ``inf`` without obstacle points.
+        """
+        if self.tree is None:
+            return float("inf")
+        points = np.asarray(points, dtype=float).reshape(-1, self.dim)
+        if self.grid is not None and np.isfinite(below_m):
+            margin = (1.0 if self._centred else 2.0) * self._half_diag_m
+            points = points[self._field_at(points) - margin < below_m + 1e-9]
+            if not len(points):
+                return float("inf")
+        return float(self.tree.query(points)[0].min())
 
     def _lower_bound(
         self, a: np.ndarray, b: np.ndarray, within_m: float | None = None
@@ -281,15 +304,14 @@ class ObstacleIndex:
             return np.full(len(a), np.inf), np.zeros(len(a)), np.zeros((len(a), self.dim))
         if keys is None:
             dist, param, which = ck.segments_nearest(
-                self.points, *self._kernel_tree, a, b,
-                float(within_m), *self._kernel_field, _einsum_order(),
+                *self._kernel_tree, a, b, float(within_m), *self._kernel_field, einsum_order(),
             )  # fmt: skip
         else:
             keys = np.ascontiguousarray(keys, dtype=np.int64)
             table = self._kernel_table(len(keys))
             dist, param, which, added = ck.segments_nearest_cached(
-                self.points, *self._kernel_tree, a, b, float(within_m), keys,
-                self.cache_slack_m, *table, *self._kernel_field, _einsum_order(),
+                *self._kernel_tree, a, b, float(within_m), keys,
+                self.cache_slack_m, *table, *self._kernel_field, einsum_order(),
             )  # fmt: skip
             self._ktable_used += int(added)
         closest = np.zeros((len(a), self.dim))

@@ -9,7 +9,7 @@ arithmetic of the reference search (:meth:`ObstacleIndex._segment_clearance_refe
 and ties go to the lowest point index, as there, so both return the same bits. The
 reference's dot products are ``numpy.einsum("kd,kd->k")``, whose summation order for three
 terms depends on numpy's SIMD build (``(x0 + x2) + x1`` with two-lane vectors):
-:func:`einsum_order` probes it once and the kernel follows.
+:func:`tether.world.clearance.einsum_order` probes it once and the kernel follows.
 """
 
 from __future__ import annotations
@@ -24,15 +24,10 @@ _STACK = 256  # depth-first stack (the tree is balanced: depth ~ log2(m / LEAF_S
 _PRUNE_REL = 1e-9  # a box is skipped only if its distance exceeds the best by this much
 
 
-def einsum_order() -> int:
-    """1 if ``numpy.einsum("kd,kd->k")`` sums three terms as ``(x0 + x2) + x1``, else 0."""
-    x = np.array([[1.0, 2.0**-53, -1.0]])
-    return int(np.einsum("kd,kd->k", x, np.ones((1, 3)))[0] != 0.0)
-
-
 @njit(cache=True, inline="always")
 def edot(x, y, order):  # noqa: ANN001, ANN201
-    """``sum_d x[d] y[d]`` in the order of ``numpy.einsum`` (see :func:`einsum_order`)."""
+    """``sum_d x[d] y[d]`` in the order of ``numpy.einsum`` (``order``: see
+    :func:`tether.world.clearance.einsum_order`)."""
     if order == 1 and x.shape[0] == 3:
         return (x[0] * y[0] + x[2] * y[2]) + x[1] * y[1]
     acc = 0.0
@@ -45,10 +40,10 @@ def edot(x, y, order):  # noqa: ANN001, ANN201
 def build_tree(points, leaf_size):  # noqa: ANN001, ANN201
     """A balanced k-d tree (median splits along the widest side of tight boxes).
 
-    Returns ``perm`` (points in leaf order), per node the box ``lo``, ``hi``, the first
-    child ``child`` (the second is ``child + 1``; ``-1`` for a leaf), the range
-    ``start:end`` of ``perm`` it holds, and the box's centre ``cen`` and half diagonal
-    ``rad``.
+    Returns ``spts`` (the points in leaf order), ``perm`` (their indices), and per node
+    the box ``lo``, ``hi``, the first child ``child`` (the second is ``child + 1``;
+    ``-1`` for a leaf), the range ``start:end`` of ``perm`` it holds, and the box's
+    centre ``cen`` and half diagonal ``rad``.
     """
     m, dim = points.shape
     perm = np.arange(m)
@@ -104,33 +99,39 @@ def build_tree(points, leaf_size):  # noqa: ANN001, ANN201
         for d in range(dim):
             r += (0.5 * (hi[node, d] - lo[node, d])) ** 2
         rad[node] = math.sqrt(r) * (1.0 + 1e-12)
-    return perm, lo, hi, child[:count].copy(), start[:count].copy(), end[:count].copy(), cen, rad
+    spts = np.empty((m, dim))
+    for e in range(m):
+        spts[e] = points[perm[e]]
+    return spts, perm, lo, hi, child[:count].copy(), start[:count].copy(), end[:count].copy(), \
+        cen, rad  # fmt: skip
 
 
 @njit(cache=True, inline="always")
-def _node_bound(sa, sb, ab, den, lo, hi, cen, rad, node):  # noqa: ANN001, ANN202
-    """A lower bound of the distance from the segment ``sa -> sb`` to the points of ``node``.
+def _node_gaps(sa, sb, ab, den, lo, hi, cen, node):  # noqa: ANN001, ANN202
+    """Squared lower-bound ingredients of the distance from a segment to ``node``'s points.
 
-    The larger of the gap between the node's box and the segment's bounding box, and
-    the distance from the box centre to the segment less the half diagonal. (The exact
-    segment-to-box distance prunes a few more nodes but costs more than it saves.)
+    ``gap2``: squared gap between the node's box and the segment's bounding box;
+    ``cen2``: squared distance from the box centre to the segment. The node is farther
+    than ``r`` if ``gap2 > r^2`` or ``cen2 > (r + rad)^2`` (``rad``: half diagonal).
+    (The exact segment-to-box distance prunes a few more nodes but costs more.)
     """
     dim = sa.shape[0]
-    gap = 0.0
-    for d in range(dim):
-        if lo[node, d] > max(sa[d], sb[d]):
-            gap += (lo[node, d] - max(sa[d], sb[d])) ** 2
-        elif hi[node, d] < min(sa[d], sb[d]):
-            gap += (min(sa[d], sb[d]) - hi[node, d]) ** 2
+    gap2 = 0.0
     num = 0.0
     for d in range(dim):
+        top = max(sa[d], sb[d])
+        bot = min(sa[d], sb[d])
+        if lo[node, d] > top:
+            gap2 += (lo[node, d] - top) ** 2
+        elif hi[node, d] < bot:
+            gap2 += (bot - hi[node, d]) ** 2
         num += (cen[node, d] - sa[d]) * ab[d]
     s = min(max(num / den, 0.0), 1.0)
-    sq = 0.0
+    cen2 = 0.0
     for d in range(dim):
         x = sa[d] + s * ab[d] - cen[node, d]
-        sq += x * x
-    return max(math.sqrt(gap), math.sqrt(sq) - rad[node])
+        cen2 += x * x
+    return gap2, cen2
 
 
 @njit(cache=True)
@@ -169,45 +170,50 @@ def _field_clear(a, b, threshold, field, strides, shape, origin, res, margin):  
 
 
 @njit(cache=True)
-def _search(points, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, reach, seed,
-            order, rel, stack, stack_lb):  # noqa: ANN001, ANN202  # fmt: skip
+def _search(spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, reach, seed,
+            order, rel, stack, stack_g, stack_c):  # noqa: ANN001, ANN202  # fmt: skip
     """Least clearance of one segment below ``reach``: ``(d, s, point)``, point -1 if none.
 
-    Depth-first, nearer child first, a node skipped when its bound exceeds the best so
-    far (with a relative margin for rounding); ``seed`` (a point index or -1) is tried
-    first, which only tightens the pruning. Ties go to the lowest point index.
+    ``spts`` are the points in leaf order (``spts[e] = points[perm[e]]``). Depth-first,
+    nearer child first, a node skipped when its bound exceeds the best so far (with a
+    relative margin for rounding); ``seed`` (a position in ``spts`` or -1) is tried
+    first, which only tightens the pruning. A point's distance is computed exactly as
+    the reference does, and only for points whose squared distance does not rule them
+    out; ties go to the lowest point index.
     """
     dim = sa.shape[0]
-    best, best_s, best_i = reach, 0.0, -1
+    best, best_s, best_i, best_e = reach, 0.0, -1, -1
     stack[0] = 0
-    stack_lb[0] = 0.0
+    stack_g[0] = 0.0
+    stack_c[0] = 0.0
     top = 1
-    p = seed
-    while p >= 0 or top > 0:
-        is_seed = p >= 0
-        e0, e_end = 0, 1
-        if not is_seed:  # the next node
+    e_seed = seed
+    while e_seed >= 0 or top > 0:
+        thr = best * (1.0 + _PRUNE_REL) + _PRUNE_REL
+        if e_seed >= 0:  # the seed: one point, scanned as a leaf of its own
+            e0, e_end = e_seed, e_seed + 1
+            e_seed = -1
+        else:
             top -= 1
             node = stack[top]
-            if stack_lb[top] > best * (1.0 + _PRUNE_REL) + _PRUNE_REL:
+            if stack_g[top] > thr * thr or stack_c[top] > (thr + rad[node]) ** 2:
                 continue
             first = child[node]
             if first >= 0:
-                l0 = _node_bound(sa, sb, ab, den, lo, hi, cen, rad, first)
-                l1 = _node_bound(sa, sb, ab, den, lo, hi, cen, rad, first + 1)
-                near, far, l_near, l_far = first, first + 1, l0, l1
-                if l1 < l0:
-                    near, far, l_near, l_far = first + 1, first, l1, l0
-                stack[top], stack_lb[top] = far, l_far
-                stack[top + 1], stack_lb[top + 1] = near, l_near
+                g0, c0 = _node_gaps(sa, sb, ab, den, lo, hi, cen, first)
+                g1, c1 = _node_gaps(sa, sb, ab, den, lo, hi, cen, first + 1)
+                near, far = first, first + 1
+                if c1 < c0:
+                    near, far, g0, c0, g1, c1 = first + 1, first, g1, c1, g0, c0
+                stack[top], stack_g[top], stack_c[top] = far, g1, c1
+                stack[top + 1], stack_g[top + 1], stack_c[top + 1] = near, g0, c0
                 top += 2
                 continue
             e0, e_end = start[node], end[node]
+        best2 = best * best * (1.0 + 1e-12)
         for e in range(e0, e_end):
-            if not is_seed:
-                p = perm[e]
             for d in range(dim):
-                rel[d] = points[p, d] - sa[d]
+                rel[d] = spts[e, d] - sa[d]
             s = edot(rel, ab, order) / den
             if s < 0.0:
                 s = 0.0
@@ -215,25 +221,29 @@ def _search(points, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, 
                 s = 1.0
             sq = 0.0
             for d in range(dim):
-                x = sa[d] + s * ab[d] - points[p, d]
+                x = sa[d] + s * ab[d] - spts[e, d]
                 sq += x * x
+            if sq > best2:
+                continue  # sqrt(sq) > best: neither closer nor tied
             dd = math.sqrt(sq)
+            p = perm[e]
             if dd < best or (best_i >= 0 and dd == best and p < best_i):
-                best, best_s, best_i = dd, s, p
-        p = -1
-    return best, best_s, best_i
+                best, best_s, best_i, best_e = dd, s, p, e
+                best2 = best * best * (1.0 + 1e-12)
+    return best, best_s, best_i, best_e
 
 
 @njit(cache=True)
 def segments_nearest(  # noqa: ANN201, PLR0913
-    points, perm, lo, hi, child, start, end, cen, rad, a, b, within,
+    spts, perm, lo, hi, child, start, end, cen, rad, a, b, within,
     field, strides, shape, origin, res, margin, order,
 ):  # noqa: ANN001  # fmt: skip
     """Per segment ``a[k] -> b[k]``: least clearance below ``within``, its parameter, its point.
 
     The tree is :func:`build_tree`'s; ``field`` (raveled distance field, empty for
     none), ``strides``, ``shape``, ``origin``, ``res`` and ``margin`` describe the
-    grid bound (:func:`_field_clear`); ``order`` is :func:`einsum_order`. Returns
+    grid bound (:func:`_field_clear`); ``order`` is
+    :func:`tether.world.clearance.einsum_order`. Returns
     ``dist`` (``inf`` where the clearance is ``>= within``), ``param`` and the index
     of the closest obstacle point (``-1`` where ``dist`` is ``inf``).
     """
@@ -241,12 +251,13 @@ def segments_nearest(  # noqa: ANN201, PLR0913
     dist = np.full(k_seg, np.inf)
     param = np.zeros(k_seg)
     which = np.full(k_seg, -1, np.int64)
-    if len(points) == 0:
+    if len(spts) == 0:
         return dist, param, which
     ab = np.empty(dim)
     rel = np.empty(dim)
     stack = np.empty(_STACK, np.int64)
-    stack_lb = np.empty(_STACK)
+    stack_g = np.empty(_STACK)
+    stack_c = np.empty(_STACK)
     for k in range(k_seg):
         sa, sb = a[k], b[k]
         if len(field) and _field_clear(sa, sb, within, field, strides, shape, origin, res,
@@ -256,9 +267,9 @@ def segments_nearest(  # noqa: ANN201, PLR0913
             ab[d] = sb[d] - sa[d]
         denom = edot(ab, ab, order)
         den = denom if denom > 0 else 1.0
-        d_k, s_k, p_k = _search(
-            points, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, within, -1,
-            order, rel, stack, stack_lb,
+        d_k, s_k, p_k, _ = _search(
+            spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, within, -1,
+            order, rel, stack, stack_g, stack_c,
         )  # fmt: skip
         if p_k >= 0:
             dist[k], param[k], which[k] = d_k, s_k, p_k
@@ -277,7 +288,7 @@ def _slot(table_keys, key):  # noqa: ANN001, ANN202
 
 @njit(cache=True)
 def segments_nearest_cached(  # noqa: ANN201, PLR0913
-    points, perm, lo, hi, child, start, end, cen, rad, a, b, within, keys, slack,
+    spts, perm, lo, hi, child, start, end, cen, rad, a, b, within, keys, slack,
     table_keys, table_bound, table_a, table_b, table_seed,
     field, strides, shape, origin, res, margin, order,
 ):  # noqa: ANN001  # fmt: skip
@@ -285,24 +296,26 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
 
     The table (open addressing, keys ``-1`` = empty, at most half full) holds, per
     key, a lower bound of the clearance of the segment ``table_a -> table_b`` and the
-    closest point found (``table_seed``, -1 if none). Clearance is 1-Lipschitz in the
-    endpoints, so ``bound - move`` (``move``: the larger endpoint displacement) bounds
-    the new segment: at or above ``within`` it is settled without a search. Otherwise
-    the segment is checked against ``within + slack`` (field, then search from the old
-    closest point) and its entry renewed. Sound whatever the keys. Returns ``dist``,
-    ``param``, ``which`` and the number of keys added to the table.
+    closest point found (``table_seed``, its position in ``spts``, -1 if none).
+    Clearance is 1-Lipschitz in the endpoints, so ``bound - move`` (``move``: the
+    larger endpoint displacement) bounds the new segment: at or above ``within`` it
+    is settled without a search. Otherwise the segment is checked against ``within +
+    slack`` (field, then search from the old closest point) and its entry renewed.
+    Sound whatever the keys. Returns ``dist``, ``param``, ``which`` and the number of
+    keys added to the table.
     """
     k_seg, dim = a.shape
     dist = np.full(k_seg, np.inf)
     param = np.zeros(k_seg)
     which = np.full(k_seg, -1, np.int64)
     added = 0
-    if len(points) == 0:
+    if len(spts) == 0:
         return dist, param, which, added
     ab = np.empty(dim)
     rel = np.empty(dim)
     stack = np.empty(_STACK, np.int64)
-    stack_lb = np.empty(_STACK)
+    stack_g = np.empty(_STACK)
+    stack_c = np.empty(_STACK)
     reach = within + slack
     for k in range(k_seg):
         sa, sb = a[k], b[k]
@@ -330,12 +343,12 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
             ab[d] = sb[d] - sa[d]
         denom = edot(ab, ab, order)
         den = denom if denom > 0 else 1.0
-        d_k, s_k, p_k = _search(
-            points, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, reach, seed,
-            order, rel, stack, stack_lb,
+        d_k, s_k, p_k, e_k = _search(
+            spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, reach, seed,
+            order, rel, stack, stack_g, stack_c,
         )  # fmt: skip
         table_bound[h] = d_k if p_k >= 0 else reach
-        table_seed[h] = p_k
+        table_seed[h] = e_k
         if p_k >= 0 and d_k < within:
             dist[k], param[k], which[k] = d_k, s_k, p_k
     return dist, param, which, added
