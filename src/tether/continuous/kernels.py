@@ -400,3 +400,39 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
             vel[r, c] = v * (ta[pick, c] + t_pick * dta[pick, c])
             acc[r, c] = (v * v) * (ka[pick, c] + t_pick * dka[pick, c])
     return s_best, point, dist_out, remaining, vel, acc
+
+
+def warm_up() -> None:
+    """Compile or load (from numba's cache) every kernel of the continuous strategies.
+
+    Each kernel is called once on a tiny input of the types the strategies pass, so
+    that a benchmark (or a worker of a campaign) can pay numba's start-up up front and
+    measure it on its own.
+    """
+    from tether.graph.kernels import laplacian_dense_kernel
+    from tether.world.clearance import ObstacleIndex
+    from tether.world.los_kernels import segment_free_kernel
+
+    q = np.array([[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [1.0, 1.5, 1.0]])
+    pairs = pairs_in_range(q, 6.0)
+    pairs_below(q, pairs, 6.0)
+    index = ObstacleIndex(np.array([[1.0, 0.5, 1.0], [5.0, 5.0, 5.0]]), 3)
+    i, j = pairs[:, 0], pairs[:, 1]
+    clear, s, o = index.segment_clearance_kernel(q[i], q[j], 1.75, i * 3 + j)
+    index.segment_clearance_kernel(q[i], q[j], 1.75)
+    out = weights_kernel(q, pairs, True, clear, s, o, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
+    pf, dP_di, dP_dj, _, coll, cp, cu, cl = out
+    nu = np.array([-0.5, 0.0, 0.5])
+    energy = edge_energy_kernel(3, pairs, pf, coll, nu)
+    grad = gradient_kernel(3, pairs, dP_di, dP_dj, cp, cu, cl, nu, coll, energy)
+    force_kernel(grad, np.full(3, 0.1), 0.0, 0.5, 1.0)
+    laplacian_dense_kernel(3, pairs, pf)
+    first = np.array([0, 1], dtype=np.int64)
+    seg = np.ones((1, 3))
+    one = np.ones(1)
+    path_states_kernel(q[:1].copy(), first, seg, seg, one, one, one, seg, seg, seg, seg, one,
+                       one, 1e-6, 1, one.copy(), one.copy() + 1, np.full(1, -1))  # fmt: skip
+    for mask in (np.ones((4, 4), dtype=bool), np.ones((4, 4, 4), dtype=bool)):
+        shape = np.asarray(mask.shape, dtype=np.int64)
+        a = np.full((1, mask.ndim), 0.5)
+        segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5)
