@@ -2,6 +2,6 @@
 
 from __future__ import annotations
 
-from tether.record import machine
+from tether.runfolder import machine
 
 __all__ = ["machine"]

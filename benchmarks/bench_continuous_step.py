@@ -45,7 +45,7 @@ from tether.continuous.gradient import connectivity_force, messages
 from tether.continuous.placement import safe_team  # noqa: E402
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
 from tether.continuous.weights import compute_weights
-from tether.record import machine  # noqa: E402
+from tether.runfolder import machine  # noqa: E402
 from tether.world.clearance import ObstacleIndex
 from tether.world.scenes import make_scene  # noqa: E402
 from tether.world.world import World  # noqa: E402

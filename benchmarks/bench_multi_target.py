@@ -203,8 +203,7 @@ def main() -> None:
             print(f"tether run {name}: {took}", flush=True)
         out["cli_wall_s"] = {n: {k: {"median": statistics.median(v), "runs": v}
                                  for k, v in d.items()} for n, d in cli.items()}  # fmt: skip
-    sys.path.insert(0, str(Path(__file__).parent))
-    from _machine import machine
+    from tether.runfolder import machine
 
     out["machine"] = machine()
     out["load_average_before_after"] = [load_before, os.getloadavg()]

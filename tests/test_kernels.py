@@ -216,13 +216,24 @@ def test_segment_free_kernel_equals_reference(dim: int) -> None:
         b = a + rng.normal(0, scale, a.shape)
         b[:5] = a[:5]
         b[5:10, 0] = a[5:10, 0]
-        assert jit.enabled()
         assert_same(*both(segment_free, mask, a, b))
 
 
-def test_switch() -> None:
+def test_switch(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:  # noqa: ANN001
     with jit.using(False):
         assert not jit.enabled() and not jit.warm()
         with jit.using(True):
             assert jit.enabled()
         assert not jit.enabled()
+    # auto: the reference paths until TETHER_JIT_AFTER_S has passed and the cache is ready
+    monkeypatch.setattr(jit, "_mode", "auto")
+    monkeypatch.setattr(jit, "_switched", False)
+    monkeypatch.setattr(jit, "_first_hot", None)
+    monkeypatch.setattr(jit, "_next_check", 0.0)
+    monkeypatch.setattr(jit, "_spawned", True)  # no background warm-up from a test
+    monkeypatch.setenv("TETHER_JIT_AFTER_S", "0")
+    monkeypatch.setattr(jit, "marker", lambda: tmp_path / "ready")
+    assert not jit.enabled()  # no marker: the cache may be cold
+    monkeypatch.setattr(jit, "_next_check", 0.0)
+    (tmp_path / "ready").write_text("")
+    assert jit.enabled()

@@ -1,5 +1,7 @@
 """Compiled kernels of App. A: pairs, weights, edge energies, gradient (numba, lazy).
 
+(Closest points on paths: :mod:`tether.continuous.tracking_kernels`.)
+
 The fast paths of :func:`tether.continuous.weights.compute_weights`,
 :func:`tether.continuous.gradient.edge_energy`,
 :func:`tether.continuous.gradient.lambda2_gradient` and
@@ -14,11 +16,14 @@ of 35 robots the numpy versions are almost all interpreter and dispatch overhead
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 from numba import njit
 
-from tether.world.clearance_kernels import edot
+from tether import jit
+from tether.graph.kernels import laplacian_dense_kernel
+from tether.world.clearance_kernels import segments_nearest_cached
 
 #: below this many robots the pairs are found by testing all of them
 BRUTE_MAX_N = 128
@@ -239,6 +244,77 @@ def weights_kernel(  # noqa: ANN201, PLR0913
     return pair_factor, dP_di, dP_dj, clear, collision, coll_pairs, coll_unit, coll_logd
 
 
+def no_obstacles(dim: int) -> tuple:
+    """:func:`evaluate_kernel`'s obstacle arguments for a world without obstacle points.
+
+    Arrays of the types an obstacle index passes, so that both share one compilation.
+    """
+    i, f1, f2 = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, dim))
+    tree = (f2, i, f2, f2, i, i, i, f2, f1)
+    table = (np.full(2, -1, np.int64), f1, f2, f2, i)
+    return f2, tree, table, 0, (f1, i, i, np.zeros(dim), 1.0, 0.0)
+
+
+@njit(cache=True)
+def evaluate_kernel(  # noqa: ANN201, PLR0913
+    q, rs_inner, rs, ro, ro_outer, rc, rc_outer, want_laplacian, obstacles, points, tree,
+    table, used, slack, field, order,
+):  # noqa: ANN001  # fmt: skip
+    """:func:`~tether.continuous.weights.compute_weights` in one call, plus ``W`` and ``L``.
+
+    Pairs (:func:`pairs_in_range`), their clearance (``obstacles``: the cached search
+    :func:`~tether.world.clearance_kernels.segments_nearest_cached` on ``points``,
+    ``tree``, ``table`` with ``used`` slots filled, keys ``i n + j``), the weights
+    (:func:`weights_kernel`), ``W_ij`` and, with ``want_laplacian``, the dense
+    Laplacian (:func:`tether.graph.kernels.laplacian_dense_kernel`). Returns those and
+    the number of table slots added, or -1 (and nothing computed) when the table
+    would be more than half full: the caller enlarges it and calls again.
+    """
+    n, dim = q.shape
+    pairs = pairs_in_range(q, rs)
+    m = len(pairs)
+    clear = np.zeros(0)
+    s_star = np.zeros(0)
+    o_star = np.zeros((0, dim))
+    added = 0
+    has_obstacles = obstacles and m > 0
+    if has_obstacles:
+        if used + m > len(table[0]) // 2:
+            added = -1
+        else:
+            a = np.empty((m, dim))
+            b = np.empty((m, dim))
+            keys = np.empty(m, np.int64)
+            for k in range(m):
+                a[k] = q[pairs[k, 0]]
+                b[k] = q[pairs[k, 1]]
+                keys[k] = pairs[k, 0] * n + pairs[k, 1]
+            spts, perm, lo, hi, child, start, end, cen, rad = tree
+            t_keys, t_bound, t_a, t_b, t_seed = table
+            f_flat, f_strides, f_shape, f_origin, f_res, f_margin = field
+            clear, s_star, which, added = segments_nearest_cached(
+                spts, perm, lo, hi, child, start, end, cen, rad, a, b, ro_outer, keys, slack,
+                t_keys, t_bound, t_a, t_b, t_seed,
+                f_flat, f_strides, f_shape, f_origin, f_res, f_margin, order,
+            )  # fmt: skip
+            o_star = np.zeros((m, dim))
+            for k in range(m):
+                if which[k] >= 0:
+                    o_star[k] = points[which[k]]
+    if added < 0:
+        z = np.zeros((0, dim))
+        return (np.zeros(0), z, z, np.zeros(0), np.zeros(0), pairs[:0].copy(), z, np.zeros(0),
+                pairs, np.zeros(0), np.zeros((0, 0)), added)  # fmt: skip
+    pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd = weights_kernel(
+        q, pairs, has_obstacles, clear, s_star, o_star, rs_inner, rs, ro, ro_outer, rc, rc_outer
+    )
+    w = np.empty(m)
+    for k in range(m):
+        w[k] = pf[k] * coll[pairs[k, 0]] * coll[pairs[k, 1]]
+    lap = laplacian_dense_kernel(n, pairs, w) if want_laplacian else np.zeros((0, 0))
+    return pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added
+
+
 @njit(cache=True)
 def edge_energy_kernel(n, pairs, pair_factor, collision, nu):  # noqa: ANN001, ANN201
     """``T_i = sum_j W_ij (nu_i - nu_j)^2`` as :func:`~tether.continuous.gradient.edge_energy`."""
@@ -306,109 +382,15 @@ def force_kernel(grad, lam, lo, hi, gain):  # noqa: ANN001, ANN201
     return out
 
 
-@njit(cache=True, inline="always")
-def _foot(q, r, pa, dseg, inv_len2, k, order, rel, off):  # noqa: ANN001, ANN202
-    """``(t, |q_r - foot|)`` on segment ``k``, in the numpy version's arithmetic."""
-    dim = q.shape[1]
-    for c in range(dim):
-        rel[c] = q[r, c] - pa[k, c]
-    t = min(max(edot(rel, dseg[k], order) * inv_len2[k], 0.0), 1.0)
-    for c in range(dim):
-        off[c] = rel[c] - t * dseg[k, c]
-    return t, math.sqrt(edot(off, off, order))
-
-
-@njit(cache=True, inline="always")
-def _skip_to(q, r, pa, chord_start, chord_end, k, hi, limit):  # noqa: ANN001, ANN202
-    """First segment from ``k`` on that may come within ``limit`` of robot ``r``.
-
-    A point of segment ``j >= k`` is at most ``chord_end[j] - chord_start[k]`` (the
-    polyline's length in between) from the sample ``pa[k]``, so it is farther than
-    ``limit`` from the robot while that is below ``|q_r - pa[k]| - limit``.
-    """
-    dim = q.shape[1]
-    sq = 0.0
-    for c in range(dim):
-        sq += (q[r, c] - pa[k, c]) ** 2
-    reach = math.sqrt(sq) - limit - 1e-9
-    j = k
-    while j < hi and chord_end[j] - chord_start[k] < reach:
-        j += 1
-    return j
-
-
-@njit(cache=True)
-def path_states_kernel(  # noqa: ANN201, PLR0913
-    q, first, pa, dseg, inv_len2, sa, ds, ta, dta, ka, dka, lengths, speed, tie, order,
-    chord_start, chord_end, hint,
-):  # noqa: ANN001  # fmt: skip
-    """Closest points of :meth:`tether.continuous.tracking.PathSet.states`, path by path.
-
-    For robot ``r`` the segments ``first[r]:first[r + 1]`` of its path: the least
-    distance, then among the segments within ``tie`` of it the largest arc length
-    (the first such segment), in the numpy version's arithmetic (``order``:
-    :func:`tether.world.clearance.einsum_order`). Runs of segments that cannot come
-    that close are skipped (:func:`_skip_to`, from the cumulative chord lengths); the
-    search starts from ``hint[r]`` (last call's segment, updated), which only speeds it
-    up. Returns ``s_best``, ``point``, ``distance``, ``remaining``, ``velocity``,
-    ``acceleration``.
-    """
-    r_count, dim = q.shape
-    s_best = np.empty(r_count)
-    point = np.empty((r_count, dim))
-    dist_out = np.empty(r_count)
-    remaining = np.empty(r_count)
-    vel = np.empty((r_count, dim))
-    acc = np.empty((r_count, dim))
-    rel = np.empty(dim)
-    off = np.empty(dim)
-    for r in range(r_count):
-        lo, hi = first[r], first[r + 1]
-        best = np.inf
-        if lo <= hint[r] < hi:
-            best = _foot(q, r, pa, dseg, inv_len2, hint[r], order, rel, off)[1]
-        k = lo
-        while k < hi:  # the least distance
-            j = _skip_to(q, r, pa, chord_start, chord_end, k, hi, best + tie)
-            if j > k:
-                k = j
-                continue
-            best = min(best, _foot(q, r, pa, dseg, inv_len2, k, order, rel, off)[1])
-            k += 1
-        s_max, pick, t_pick, d_pick = -np.inf, -1, 0.0, 0.0
-        k = lo
-        while k < hi:  # the largest arc length within tie of it
-            j = _skip_to(q, r, pa, chord_start, chord_end, k, hi, best + tie)
-            if j > k:
-                k = j
-                continue
-            t, dk = _foot(q, r, pa, dseg, inv_len2, k, order, rel, off)
-            if dk <= best + tie:
-                s_foot = sa[k] + t * ds[k]
-                if s_foot > s_max:
-                    s_max, pick, t_pick, d_pick = s_foot, k, t, dk
-            k += 1
-        hint[r] = pick
-        s_best[r] = s_max
-        dist_out[r] = d_pick
-        for c in range(dim):
-            rel_c = q[r, c] - pa[pick, c]
-            point[r, c] = q[r, c] - (rel_c - t_pick * dseg[pick, c])
-        v = speed[r] * (1.0 if (lengths[r] - s_max) > 1e-9 else 0.0)
-        remaining[r] = max(lengths[r] - s_max, 0.0)
-        for c in range(dim):
-            vel[r, c] = v * (ta[pick, c] + t_pick * dta[pick, c])
-            acc[r, c] = (v * v) * (ka[pick, c] + t_pick * dka[pick, c])
-    return s_best, point, dist_out, remaining, vel, acc
-
-
-def warm_up() -> None:
+def warm_up() -> float:
     """Compile or load (from numba's cache) every kernel of the continuous strategies.
 
     Each kernel is called once on a tiny input of the types the strategies pass, so
     that a benchmark (or a worker of a campaign) can pay numba's start-up up front and
-    measure it on its own.
+    measure it on its own; then the marker of :func:`tether.jit.marker` is written (the
+    ``auto`` switch waits for it). Returns the seconds it took.
     """
+    start = time.perf_counter()
     from tether.graph.kernels import laplacian_dense_kernel
     from tether.world.clearance import ObstacleIndex
     from tether.world.los_kernels import segment_free_kernel
@@ -430,9 +412,28 @@ def warm_up() -> None:
     first = np.array([0, 1], dtype=np.int64)
     seg = np.ones((1, 3))
     one = np.ones(1)
+    from tether.continuous.tracking_kernels import path_states_kernel
+
     path_states_kernel(q[:1].copy(), first, seg, seg, one, one, one, seg, seg, seg, seg, one,
                        one, 1e-6, 1, one.copy(), one.copy() + 1, np.full(1, -1))  # fmt: skip
     for mask in (np.ones((4, 4), dtype=bool), np.ones((4, 4, 4), dtype=bool)):
         shape = np.asarray(mask.shape, dtype=np.int64)
         a = np.full((1, mask.ndim), 0.5)
         segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5)
+    for obs in (None, index):
+        points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
+            obs.kernel_state(3)  # fmt: skip
+        evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
+                        table, used, 0.25, fld, 1)  # fmt: skip
+    seconds = time.perf_counter() - start
+    jit.write_marker(seconds)
+    return seconds
+
+
+if __name__ == "__main__":  # the background warm-up of tether.jit's ``auto`` switch
+    import contextlib
+    import os
+
+    with contextlib.suppress(AttributeError, OSError):
+        os.nice(10)
+    warm_up()

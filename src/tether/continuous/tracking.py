@@ -136,7 +136,7 @@ class PathSet:
 
     def _states_kernel(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
         """:meth:`states` by :func:`tether.continuous.kernels.path_states_kernel` (same bits)."""
-        from tether.continuous.kernels import path_states_kernel
+        from tether.continuous.tracking_kernels import path_states_kernel
         from tether.world.clearance import einsum_order
 
         if self._kernel is None:  # segment ranges, cumulative chords, last segments found

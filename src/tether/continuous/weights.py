@@ -26,7 +26,7 @@ from the world layer's :class:`tether.world.clearance.ObstacleIndex`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -60,9 +60,15 @@ class WeightedGraph:
     coll_unit: np.ndarray
     coll_logd: np.ndarray
 
+    # the kernels' W and dense Laplacian, when they computed them (same bits)
+    _weights: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _laplacian: np.ndarray | None = field(default=None, repr=False, compare=False)
+
     @property
     def weights(self) -> np.ndarray:
         """``W_ij = P_ij C_i C_j`` per pair."""
+        if self._weights is not None:
+            return self._weights
         return (
             self.pair_factor * self.collision[self.pairs[:, 0]] * self.collision[self.pairs[:, 1]]
         )
@@ -84,8 +90,8 @@ class WeightedGraph:
         above ``SUBSET_MAX_N`` robots, is the certified warm start.
         """
         w = self.weights
-        lap = None
-        if jit.enabled() and self.n <= SUBSET_MAX_N:  # the dense solvers' matrix, compiled
+        lap = self._laplacian
+        if lap is None and jit.enabled() and self.n <= SUBSET_MAX_N:  # compiled, same matrix
             from tether.graph.kernels import laplacian_dense_kernel
 
             lap = laplacian_dense_kernel(self.n, self.pairs, w)
@@ -148,7 +154,7 @@ def _compute_weights_kernel(
     q = np.ascontiguousarray(q)
     n = len(q)
     if pairs is None:
-        pairs = k.pairs_in_range(q, params.rs_m)
+        return _evaluate_kernel(q, params, obstacles)
     else:
         pairs = k.pairs_below(q, np.asarray(pairs, dtype=np.int64).reshape(-1, 2), params.rs_m)
     has_obstacles = obstacles is not None and len(pairs) > 0
@@ -168,6 +174,38 @@ def _compute_weights_kernel(
 
 
 _NO_CLEARANCE = (np.zeros(0), np.zeros(0), np.zeros((0, 3)))
+
+
+def _evaluate_kernel(
+    q: np.ndarray, params: ConnectivityParams, obstacles: ObstacleIndex | None
+) -> WeightedGraph:
+    """Pairs, clearance, weights, ``W`` and the dense Laplacian in one kernel call."""
+    from tether.continuous.kernels import evaluate_kernel, no_obstacles
+    from tether.world.clearance import einsum_order
+
+    n, dim = q.shape
+    has = obstacles is not None and obstacles.tree is not None and n > 1
+    estimate = min(n * (n - 1) // 2, 32 * n)
+    slack = obstacles.cache_slack_m if has else 0.0
+    for _ in range(2):
+        points, tree, table, used, fld = obstacles.kernel_state(estimate) if has else \
+            no_obstacles(dim)  # fmt: skip
+        out = evaluate_kernel(
+            q, params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
+            params.rc_outer_m, n <= SUBSET_MAX_N, has, points, tree, table, used, slack, fld,
+            einsum_order(),
+        )  # fmt: skip
+        if out[-1] >= 0:
+            break
+        estimate = len(out[8])
+        obstacles.kernel_grow(estimate)
+    pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added = out
+    if has:
+        obstacles.kernel_added(added)
+    elif obstacles is not None and len(pairs):  # an index without points: the obstacle branch
+        return _compute_weights_kernel(q, params, obstacles, pairs)
+    return WeightedGraph(n, pairs, pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit,
+                         coll_logd, w, lap if n <= SUBSET_MAX_N else None)  # fmt: skip
 
 
 def _compute_weights_reference(

@@ -64,7 +64,7 @@ class ObstacleIndex:
     """
 
     def __init__(self, points: np.ndarray, dim: int, grid: OccupancyGrid | None = None) -> None:
-        self.points = np.asarray(points, dtype=float).reshape(-1, dim)
+        self.points = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, dim))
         self.dim = dim
         self.grid = grid if len(self.points) else None
         self.tree = cKDTree(self.points) if len(self.points) else None
@@ -321,6 +321,25 @@ class ObstacleIndex:
 
     _ktable: tuple[np.ndarray, ...] | None = None
     _ktable_used: int = 0
+
+    def kernel_state(self, n_keys: int) -> tuple:
+        """What a compiled caller passes to the cached search: points, tree, table, used, field.
+
+        For kernels that run :func:`~tether.world.clearance_kernels.segments_nearest_cached`
+        themselves (it needs ``cache_slack_m`` and :func:`einsum_order` too); they
+        report the slots they add with :meth:`kernel_added`.
+        """
+        return (self.points, self._kernel_tree, self._kernel_table(n_keys), self._ktable_used,
+                self._kernel_field)  # fmt: skip
+
+    def kernel_added(self, added: int) -> None:
+        self._ktable_used += int(added)
+
+    def kernel_grow(self, n_keys: int) -> None:
+        """Start an empty table big enough for ``n_keys`` (a kernel found it too full)."""
+        self._ktable = None
+        self._ktable_used = 0
+        self._kernel_table(n_keys)
 
     def _kernel_table(self, n_keys: int) -> tuple[np.ndarray, ...]:
         """The kernel's cache table, emptied and enlarged when it would be over half full."""
