@@ -237,3 +237,30 @@ def test_switch(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:  # noqa: ANN
     monkeypatch.setattr(jit, "_next_check", 0.0)
     (tmp_path / "ready").write_text("")
     assert jit.enabled()
+
+
+@pytest.mark.parametrize(
+    ("name", "robots", "steps"),
+    [("multi_target_town", 12, 60), ("multi_target_office", 0, 60), ("connectivity_town", 0, 40)],
+)
+def test_whole_runs_are_the_same_with_and_without_kernels(name: str, robots: int, steps: int):
+    """The kernels change nothing in a run: positions, velocities, lambda2, metrics."""
+    from tether.config import load_scenario
+    from tether.runner import build
+    from tether.sim import simulate
+
+    def run(on: bool):  # noqa: ANN202
+        with jit.using(on):
+            sc = load_scenario(name)
+            if robots:
+                sc.team.n_robots = robots
+            b = build(sc, sc.seed)
+            return simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=sc.sim.dt_s,
+                            max_steps=steps, rng=b.rng,
+                            collision_distance_m=sc.sim.collision_distance_m)  # fmt: skip
+
+    fast, ref = run(True), run(False)
+    assert_same(fast.final_state.positions, ref.final_state.positions)
+    assert_same(fast.final_state.velocities, ref.final_state.velocities)
+    assert [r.lambda2 for r in fast.records] == [r.lambda2 for r in ref.records]
+    assert fast.strategy_metrics == ref.strategy_metrics

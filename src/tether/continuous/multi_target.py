@@ -23,6 +23,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from tether import jit
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.consensus import EfficiencyConsensus
 from tether.continuous.dynamics import integrate
@@ -130,6 +131,8 @@ def traveling_forces(
     (4), (8), (14), (15)); anchors ``f_anchor`` (eq. (7)). Robot ``i``'s row
     uses only its own state, path and target, ``f_lambda_i`` and ``Lambda_hat_i``.
     """
+    if jit.enabled():
+        return _traveling_forces_kernel(q, v, f_lambda, planner, lambda_hat, p)
     f = np.zeros_like(q)
     role = planner.role
     trav, paths = planner.path_set()  # the travelers: prime and secondaries on their way
@@ -146,6 +149,38 @@ def traveling_forces(
     if len(held):
         f[held] = anchor_force(q[held], planner.targets_of(held), p.rz_m, p.kz_n)
     return f
+
+
+def _traveling_forces_kernel(
+    q: np.ndarray,
+    v: np.ndarray,
+    f_lambda: np.ndarray,
+    planner: RolePlanner,
+    lambda_hat: np.ndarray,
+    p: MultiTargetParams,
+) -> np.ndarray:
+    """:func:`traveling_forces` in one call of the compiled kernel (same bits)."""
+    from tether.continuous.tracking import TIE_M
+    from tether.continuous.tracking_kernels import traveling_kernel
+    from tether.world.clearance import einsum_order
+
+    trav, paths = planner.path_set()
+    trav = trav.astype(np.int64)
+    held = np.flatnonzero(planner.anchored()).astype(np.int64)
+    targets = planner.targets_of(held) if len(held) else np.zeros((0, q.shape[1]))
+    path = paths.kernel_args() if len(trav) else _NO_PATHS
+    return traveling_kernel(
+        np.ascontiguousarray(q), np.ascontiguousarray(v), np.ascontiguousarray(f_lambda), trav,
+        planner.role[trav] == SECONDARY, np.ascontiguousarray(lambda_hat, dtype=float), held,
+        np.ascontiguousarray(targets, dtype=float), path, float(p.v_cruise_mps), TIE_M,
+        einsum_order(), p.kp_n_per_m, p.kv_ns_per_m, p.mass_kg, p.damping_ns_per_m,
+        p.max_travel_force_n, p.sigma, p.rz_m, p.kz_n,
+    )  # fmt: skip
+
+
+_i0, _f1, _f2 = np.zeros(1, np.int64), np.zeros(0), np.zeros((0, 3))
+#: path arguments of the traveling kernel when nobody travels (the types of a PathSet's)
+_NO_PATHS = (_i0, _f2, _f2, _f1, _f1, _f1, _f2, _f2, _f2, _f2, _f1, _f1, _f1, _i0[:0])
 
 
 @STRATEGIES.register("multi_target")

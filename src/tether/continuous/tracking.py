@@ -134,24 +134,33 @@ class PathSet:
             acceleration_mps2=(speed**2)[:, None] * kap,
         )
 
-    def _states_kernel(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
-        """:meth:`states` by :func:`tether.continuous.kernels.path_states_kernel` (same bits)."""
-        from tether.continuous.tracking_kernels import path_states_kernel
-        from tether.world.clearance import einsum_order
+    def kernel_args(self) -> tuple[np.ndarray, ...]:
+        """The arrays :func:`~tether.continuous.tracking_kernels.path_states_kernel` reads.
 
-        if self._kernel is None:  # segment ranges, cumulative chords, last segments found
+        Segment ranges per path, the segment arrays, cumulative chord lengths (for its
+        skipping) and each path's last closest segment (a hint it updates); made once.
+        """
+        if self._kernel is None:
             bounds = np.r_[self.first, len(self.a)].astype(np.int64)
             chord = np.sqrt(np.einsum("kd,kd->k", self.d, self.d))
             end = np.cumsum(chord)
             start = end - chord
             offset = np.repeat(start[self.first], np.diff(bounds))  # each path from 0
-            self._kernel = (bounds, start - offset, end - offset, np.full(self.r, -1))
-        bounds, chord_start, chord_end, hint = self._kernel
+            self._kernel = (bounds, self.pa, self.d, self.inv_len2, self.sa, self.ds, self.ta,
+                            self.dt, self.ka, self.dk, self.lengths, start - offset,
+                            end - offset, np.full(self.r, -1))  # fmt: skip
+        return self._kernel
+
+    def _states_kernel(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
+        """:meth:`states` by :func:`tether.continuous.kernels.path_states_kernel` (same bits)."""
+        from tether.continuous.tracking_kernels import path_states_kernel
+        from tether.world.clearance import einsum_order
+
+        args = self.kernel_args()
         speed = np.broadcast_to(np.asarray(v_cruise_mps, dtype=float), (self.r,))
         out = path_states_kernel(
-            np.ascontiguousarray(q, dtype=float), bounds, self.pa, self.d, self.inv_len2,
-            self.sa, self.ds, self.ta, self.dt, self.ka, self.dk, self.lengths,
-            np.ascontiguousarray(speed), TIE_M, einsum_order(), chord_start, chord_end, hint,
+            np.ascontiguousarray(q, dtype=float), *args[:11], np.ascontiguousarray(speed), TIE_M,
+            einsum_order(), *args[11:],
         )  # fmt: skip
         return PathState(*out)
 

@@ -108,3 +108,70 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
             vel[r, c] = v * (ta[pick, c] + t_pick * dta[pick, c])
             acc[r, c] = (v * v) * (ka[pick, c] + t_pick * dka[pick, c])
     return s_best, point, dist_out, remaining, vel, acc
+
+
+@njit(cache=True)
+def traveling_kernel(  # noqa: ANN201, PLR0913
+    q, v, f_lambda, trav, secondary, lambda_hat, held, targets, path, v_cruise, tie, order,
+    kp, kv, mass, damping, max_force, sigma, rz, kz,
+):  # noqa: ANN001  # fmt: skip
+    """``f_i`` of Algorithm 2 as :func:`tether.continuous.multi_target.traveling_forces`.
+
+    ``trav``: the robots with a path (``path`` is their
+    :meth:`~tether.continuous.tracking.PathSet.kernel_args`), ``secondary`` which of
+    them are secondaries; ``held``: the anchored robots and ``targets`` their targets.
+    Eq. (3) saturated, ``rho(Theta(f_lambda, f_travel), Lambda_hat, sigma)`` for the
+    secondaries and ``f_anchor`` (eq. (7)), each in the numpy version's arithmetic.
+    """
+    n, dim = q.shape
+    f = np.zeros((n, dim))
+    r_count = len(trav)
+    if r_count:
+        first, pa, dseg, inv_len2, sa, ds, ta, dta, ka, dka, lengths, cs, ce, hint = path
+        qt = np.empty((r_count, dim))
+        for r in range(r_count):
+            qt[r] = q[trav[r]]
+        speed = np.full(r_count, v_cruise)
+        _, point, _, _, vel, acc = path_states_kernel(
+            qt, first, pa, dseg, inv_len2, sa, ds, ta, dta, ka, dka, lengths, speed, tie, order,
+            cs, ce, hint,
+        )  # fmt: skip
+        ft = np.empty(dim)
+        for r in range(r_count):
+            i = trav[r]
+            for c in range(dim):
+                ft[c] = (mass * acc[r, c] + damping * vel[r, c]) + kv * (vel[r, c] - v[i, c]) \
+                    + kp * (point[r, c] - q[i, c])  # fmt: skip
+            if np.isfinite(max_force):
+                sq = 0.0
+                for c in range(dim):
+                    sq += ft[c] * ft[c]
+                cap = min(1.0, max_force / max(math.sqrt(sq), 1e-300))
+                for c in range(dim):
+                    ft[c] = ft[c] * cap
+            scale = 1.0
+            if secondary[r]:
+                nx, ny = 0.0, 0.0
+                for c in range(dim):
+                    nx += f_lambda[i, c] * f_lambda[i, c]
+                    ny += ft[c] * ft[c]
+                nx, ny = math.sqrt(nx), math.sqrt(ny)
+                ok = nx > 0 and ny > 0
+                cos = edot(f_lambda[i], ft, order) / (nx * ny if ok else 1.0)
+                theta = 0.5 * (1.0 + min(max(cos, -1.0), 1.0)) if ok else 1.0
+                x = min(max(theta, 0.0), 1.0)
+                y = min(max(lambda_hat[i], 0.0), 1.0)
+                scale = (1 - x) * y**sigma + x * (1 - (1 - y) ** sigma)
+            for c in range(dim):
+                f[i, c] = scale * ft[c]
+    for k in range(len(held)):
+        i = held[k]
+        sq = 0.0
+        for c in range(dim):
+            sq += (q[i, c] - targets[k, c]) ** 2
+        dist = math.sqrt(sq)
+        mag = kz * math.tan(min(dist, rz) * np.pi / (2 * rz)) if dist < rz else np.nan
+        den = max(dist, 1e-300)
+        for c in range(dim):
+            f[i, c] = -mag * ((q[i, c] - targets[k, c]) / den)
+    return f
