@@ -437,3 +437,43 @@ if __name__ == "__main__":  # the background warm-up of tether.jit's ``auto`` sw
     with contextlib.suppress(AttributeError, OSError):
         os.nice(10)
     warm_up()
+
+
+@njit(cache=True)
+def euler_kernel(q, v, force, h, mass, damping, box, margin):  # noqa: ANN001, ANN201
+    """:func:`~tether.continuous.dynamics.semi_implicit_euler`, then
+    :func:`~tether.continuous.dynamics.stay_inside` if ``box`` has two rows."""
+    n, dim = q.shape
+    q_new = np.empty((n, dim))
+    v_new = np.empty((n, dim))
+    for r in range(n):
+        for c in range(dim):
+            vn = (mass * v[r, c] + h * force[r, c]) / (mass + h * damping)
+            qn = q[r, c] + h * vn
+            if len(box) == 2:
+                lo = min(box[0, c] + margin, q[r, c])
+                hi = max(box[1, c] - margin, q[r, c])
+                clipped = min(max(qn, lo), hi)
+                if clipped != qn:
+                    vn = 0.0
+                qn = clipped
+            q_new[r, c] = qn
+            v_new[r, c] = vn
+    return q_new, v_new
+
+
+@njit(cache=True)
+def displacement_kernel(v, force, mass, delta):  # noqa: ANN001, ANN201
+    """:func:`~tether.continuous.dynamics.displacement_step` (``inf`` if nothing moves)."""
+    n, dim = v.shape
+    vmax, fmax = 0.0, 0.0
+    for r in range(n):
+        sv, sf = 0.0, 0.0
+        for c in range(dim):
+            sv += v[r, c] * v[r, c]
+            sf += force[r, c] * force[r, c]
+        vmax = max(vmax, math.sqrt(sv))
+        fmax = max(fmax, math.sqrt(sf))
+    disc = vmax * vmax + 4.0 * delta * fmax / mass
+    denom = vmax + math.sqrt(disc)
+    return np.inf if denom <= 0 else 2.0 * delta / denom

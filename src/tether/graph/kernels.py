@@ -57,3 +57,51 @@ def laplacian_dense_kernel(n, pairs, w):  # noqa: ANN001, ANN201
     for r in range(n):
         lap[r, r] = -(0.0 + pairwise_sum(flat, r * n, n))
     return lap
+
+
+@njit(cache=True)
+def pairs_within_kernel(q, r):  # noqa: ANN001, ANN201
+    """Pairs ``i < j`` with ``sum_d (q_i - q_j)_d^2 <= r^2`` in lexicographic order.
+
+    :func:`tether.graph.structure.pairs_within`'s result (``cKDTree.query_pairs``
+    tests squared distances summed in coordinate order against ``r * r`` the same
+    way); all pairs are tested (teams of up to a few hundred robots).
+    """
+    n, dim = q.shape
+    r2 = r * r
+    cap = 8 * n + 8
+    out = np.empty((cap, 2), np.int64)
+    m = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            sq = 0.0
+            for d in range(dim):
+                x = q[i, d] - q[j, d]
+                sq += x * x
+            if sq <= r2:
+                if m == len(out):
+                    bigger = np.empty((2 * len(out), 2), np.int64)
+                    bigger[:m] = out
+                    out = bigger
+                out[m, 0], out[m, 1] = i, j
+                m += 1
+    return out[:m].copy()
+
+
+@njit(cache=True)
+def component_count_kernel(n, pairs):  # noqa: ANN001, ANN201
+    """Number of connected components (union-find with path halving)."""
+    parent = np.arange(n)
+    count = n
+    for k in range(len(pairs)):
+        a, b = pairs[k, 0], pairs[k, 1]
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        while parent[b] != b:
+            parent[b] = parent[parent[b]]
+            b = parent[b]
+        if a != b:
+            parent[a] = b
+            count -= 1
+    return count
