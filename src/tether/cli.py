@@ -53,6 +53,8 @@ def run(
     seed: Annotated[int | None, typer.Option(help="Override the scenario's seed.")] = None,
     set_: SetOpt = None,
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
+    animate_: Annotated[bool, typer.Option("--animate", help="Then `tether animate` it.")] = False,
+    view_: Annotated[bool, typer.Option("--view", help="Then `tether view` it.")] = False,
 ) -> None:
     """Run one scenario and write its run folder (scenario, Parquet records, summary, figures).
 
@@ -86,6 +88,10 @@ def run(
             v = s[k]
             out.print(f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}")
     out.print(f"results: [bold]{outcome.path}[/]")
+    if animate_:
+        animate(outcome.path)
+    if view_:
+        view(outcome.path)
 
 
 @app.command()
@@ -149,6 +155,60 @@ def list_() -> None:
     out.print("strategies:  " + ", ".join(names["strategies"]))
     out.print("scenes:      " + ", ".join(names["scenes"]))
     out.print("link models: " + ", ".join(names["link models"]))
+
+
+RunDirArg = Annotated[Path, typer.Argument(help="A run folder written by `tether run`.")]
+
+
+@app.command()
+def animate(
+    run_dir: RunDirArg,
+    out_file: Annotated[Path | None, typer.Option("--out", "-o", help="GIF or MP4 file.")] = None,
+    fmt: Annotated[str | None, typer.Option("--format", help="gif or mp4 (ffmpeg).")] = None,
+    fps: Annotated[float, typer.Option(help="Frames per second.")] = 10.0,
+    duration: Annotated[float | None, typer.Option(help="Longest length (s); default 20.")] = None,
+    stride: Annotated[int | None, typer.Option(help="Every N-th recorded step.")] = None,
+    width: Annotated[int, typer.Option(help="Width in pixels.")] = 720,
+) -> None:
+    """Animate a run folder (GIF, or MP4 where ffmpeg exists), e.g. tether animate runs/x"""
+    from tether.viz.commands import animate_command
+
+    animate_command(
+        run_dir,
+        out_file,
+        fmt=fmt,
+        fps=fps,
+        duration_s=duration,
+        stride=stride,
+        width_px=width,
+        say=out.print,
+    )
+
+
+@app.command()
+def view(
+    run_dir: RunDirArg,
+    out_file: Annotated[Path | None, typer.Option("--out", "-o", help="HTML file.")] = None,
+    max_mb: Annotated[float, typer.Option(help="Size budget; long runs are thinned.")] = 8.0,
+    serve: Annotated[bool, typer.Option(help="Also serve it on 127.0.0.1.")] = False,
+    port: Annotated[int, typer.Option(help="Port for --serve (0: any free one).")] = 8000,
+) -> None:
+    """Write a self-contained, offline HTML 3-D replay of a run folder."""
+    from tether.viz.commands import view_command
+
+    view_command(run_dir, out_file, max_mb=max_mb, serve=serve, port=port, say=out.print)
+
+
+@app.command("export")
+def export_(
+    run_dir: RunDirArg,
+    fmt: Annotated[str, typer.Option("--format", help="mcap or rosbag2.")] = "mcap",
+    out_path: Annotated[Path | None, typer.Option("--out", "-o", help="File or folder.")] = None,
+) -> None:
+    """Export a run folder as ROS 2 messages (Foxglove, RViz, ros2 bag play)."""
+    from tether.viz.commands import export_command
+
+    export_command(run_dir, out_path, fmt=fmt, say=out.print)
 
 
 def main() -> None:

@@ -28,7 +28,7 @@ from tether.runfolder import RunFolder
 from tether.sensing import SensorModel, sensed_pairs
 from tether.sim import Strategy, TeamState, simulate
 from tether.team import initial_positions
-from tether.viz.plots import links_over_time, snapshot
+from tether.viz.plots import link_range_m, links_over_time, team_snapshot
 from tether.world.scenes import make_scene
 from tether.world.world import World
 
@@ -231,16 +231,24 @@ def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Any]:
     dt_s = built.scenario.sim.dt_s
     t = np.asarray(steps["step"]) * dt_s
     n = built.initial.n
-    figs["links.png"] = links_over_time({built.scenario.name: (t, np.asarray(steps["n_links"]))}, n)
-    if recorder.positions:
-        idx = sorted({0, len(recorder.positions) // 2, len(recorder.positions) - 1})
-        figs["snapshot.png"] = snapshot(
-            [recorder.nodes(i) for i in idx],
-            [recorder.links[i] for i in idx],
-            [f"t = {recorder.position_steps[i] * dt_s:g} s" for i in idx],
-            world=built.world,
+    own = built.strategy.figures(recorder, built.world, dt_s)  # these replace standard ones
+    name = built.scenario.name
+    if "links.png" not in own:
+        n_nodes = n + (0 if recorder.fixed is None else len(recorder.fixed))
+        links = {name: (t, np.asarray(steps["n_links"]))}
+        figs["links.png"] = links_over_time(links, n_nodes, title=f"{name}: links over time")
+    if "snapshot.png" not in own:
+        params = strategy_params(built.scenario, type(built.strategy))
+        snap = team_snapshot(
+            recorder,
+            built.world,
+            dt_s,
+            range_m=link_range_m(built.scenario, params),
+            title=f"{name}: the team at three instants",
         )
-    figs.update(built.strategy.figures(recorder, built.world, dt_s))
+        if snap is not None:
+            figs["snapshot.png"] = snap
+    figs.update(own)
     return figs
 
 

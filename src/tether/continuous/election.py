@@ -156,9 +156,11 @@ class Election:
                 out.became_prime.append(int(w))
             else:
                 out.declined.append(int(w))
-        # a host whose token is in transit hears the acknowledgement
+        # a host whose token is in transit hears the acknowledgement (its own, if it won)
         for h in np.flatnonzero(self.token == TRANSIT):
-            if m[h, ACK] == m[h, RESULT] and m[h, RESULT] > 0 and m[h, WINNER] != h:
+            if m[h, ACK] > m[h, RESULT]:  # a later election exists: the token was taken
+                self.token[h] = NO_TOKEN
+            elif m[h, ACK] == m[h, RESULT] and m[h, RESULT] > 0:
                 self.token[h] = NO_TOKEN if m[h, ACK_CODE] == TAKEN else IDLE
         return out
 

@@ -363,7 +363,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._stats["stalls"] += int(stats.stalled)
         graph, lam, nu = ev[1]
         self._observe(q_new, graph, lam, nu)
-        self._bookkeep(q, q_new, float(lam), ctx.t_s + ctx.dt_s, ctx.dt_s)
+        self._bookkeep(q, q_new, float(lam), (ctx.step + 1) * ctx.dt_s, ctx.dt_s)
         return TeamState(q_new, v_new)
 
     def _bookkeep(self, q: np.ndarray, q_new: np.ndarray, lam: float, t_s: float, dt: float):

@@ -114,6 +114,7 @@ class FixedQueue(_Strict):
     robot: int = Field(ge=0)
     targets: list[list[float]]
     stay_s: float = Field(default=3.0, ge=0, allow_inf_nan=False)
+    timeout_s: float | None = Field(default=None, gt=0, description="overrides the default")
 
     @field_validator("targets")
     @classmethod
@@ -136,9 +137,9 @@ class Fixed(TargetGenerator):
 
     @classmethod
     def fill(cls, params: FixedParams, book: TargetBook, world: World, rng: Any) -> None:
-        for q in params.queues:
+        for q in params.queues:  # queues of one robot are visited in the order given
             for p in q.targets:
-                book.add(q.robot, p, q.stay_s, timeout_s=params.timeout_s)
+                book.add(q.robot, p, q.stay_s, timeout_s=q.timeout_s or params.timeout_s)
 
 
 class ScheduledTarget(_Strict):

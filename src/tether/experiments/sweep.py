@@ -21,7 +21,7 @@ from tether.config import Scenario, scenario_from_dict, set_dotted
 from tether.errors import TetherError
 from tether.experiments.executors import Trial, execute
 from tether.runfolder import save_figure, write_rows
-from tether.viz.plots import links_over_time, series_over_time
+from tether.viz.plots import TIME_LABEL, links_over_time, series_over_time
 
 
 @dataclass
@@ -147,34 +147,37 @@ def run_sweep(
             {**{f"param:{k}": v for k, v in combo.items()}, **flat, "run_dir": trial.run_dir}
         )
     table = write_rows(Path(out_dir) / "sweep.parquet", rows)
-    figures = [save_figure(fig, Path(out_dir) / "figures" / name)
-               for fig, name in sweep_figures(rows, scenario.team.n_robots)]  # fmt: skip
+    drawn = sweep_figures(rows, scenario.team.n_robots, scenario.name)
+    figures = [save_figure(fig, Path(out_dir) / "figures" / name) for fig, name in drawn]
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise TetherError(f"{errors[0]}{more}; finished trials are in {table}")
     return SweepResult(table, len(rows), n_skipped, figures)
 
 
-# per-step column -> (x column, figure name, y label); one figure per column runs record
+# per-step column -> (x column, figure name, y label, scale); one figure per column runs record
 _SWEEP_FIGURES = {
-    "n_links": ("t_s", "links.png", "number of links"),
-    "explored_fraction": ("t_s", "explored.png", "explored fraction known at the BS"),
+    "n_links": ("t_s", "links.png", "number of links", 1.0),
+    "explored_fraction": ("t_s", "explored.png", "explored area known at the BS (%)", 100.0),
 }
 
 
-def sweep_figures(rows: list[dict[str, Any]], n_robots: int) -> list[tuple[Any, str]]:
+def sweep_figures(
+    rows: list[dict[str, Any]], n_robots: int, name: str | None = None
+) -> list[tuple[Any, str]]:
     """Per-step metrics of the first seed of each combination, one line per combination.
 
     Links over time (the silent paper's Fig. 5) and, where runs record it, the
-    explored fraction (exploration strategies).
+    explored area (exploration strategies), in the one look of :mod:`tether.viz.plots`.
     """
     files = [Path(r["run_dir"]) / "steps.parquet" for r in rows]
     files = [f for f in files if f.exists()]
     if not files:
         return []
     columns = set(pq.read_schema(files[0]).names)
+    prefix = f"{name}: " if name else ""
     out = []
-    for metric, (x_col, name, ylabel) in _SWEEP_FIGURES.items():
+    for metric, (x_col, fig_name, ylabel, scale) in _SWEEP_FIGURES.items():
         if metric not in columns:
             continue
         series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -184,9 +187,10 @@ def sweep_figures(rows: list[dict[str, Any]], n_robots: int) -> list[tuple[Any, 
             if label in series or not steps_file.exists():
                 continue
             table = pq.read_table(steps_file, columns=[x_col, metric]).to_pydict()
-            series[label] = (np.asarray(table[x_col]), np.asarray(table[metric]))
+            series[label] = (np.asarray(table[x_col]), scale * np.asarray(table[metric]))
+        title = f"{prefix}{ylabel.split(' (')[0]}, first seed of each combination"
         if metric == "n_links":
-            out.append((links_over_time(series, n_robots), name))
+            out.append((links_over_time(series, n_robots, title=title), fig_name))
         else:
-            out.append((series_over_time(series, "time (s)", ylabel), name))
+            out.append((series_over_time(series, TIME_LABEL, ylabel, title=title), fig_name))
     return out

@@ -161,12 +161,27 @@ class _ExplorationPlugin(ExplorationRun):
         steps = recording.step_columns()
         t = np.asarray(steps["step"]) * dt_s
         trails = np.stack(recording.positions)
+        explored = np.asarray(steps["explored_fraction"])
+        last = recording.robot_values[-1] if recording.robot_values else {}
+        title = (
+            f"{self.name}: map known at the base station, t = {t[-1]:g} s "
+            f"({100 * explored[-1]:.0f} % explored)"
+        )
         return {
             "explored.png": explored_over_time(
-                t, np.asarray(steps["explored_fraction"]), np.asarray(steps["n_connected"])
+                t,
+                explored,
+                np.asarray(steps["n_connected"]),
+                n_robots=trails.shape[1],
+                title=f"{self.name}: explored area known at the base station",
             ),
             "map.png": known_map(
-                self.grid, self.sim.knowledge.global_known, trails, self.to_m(self.sim.base)
+                self.grid,
+                self.sim.knowledge.global_known,
+                trails,
+                self.to_m(self.sim.base),
+                connected=last.get("connected"),
+                title=title,
             ),
         }
 

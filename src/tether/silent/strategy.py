@@ -20,7 +20,7 @@ from tether.paths.trajectory import Polyline, TimeFunction
 from tether.registry import STRATEGIES
 from tether.silent.steering import constrained_steps, desired_steps
 from tether.sim import StepContext, Strategy, TeamState
-from tether.viz.plots import snapshot
+from tether.viz.plots import team_snapshot
 from tether.world.world import World
 
 
@@ -261,20 +261,18 @@ class SilentStrategy(Strategy):
 
     def figures(self, recording: Any, world: World, dt_s: float) -> dict[str, Any]:
         """The paper's Fig. 4: the team at three instants, with the leader and its path."""
-        if not recording.positions:
-            return {}
-        idx = sorted({0, len(recording.positions) // 2, len(recording.positions) - 1})
         path = self.trajectory.waypoints if isinstance(self.trajectory, Polyline) else None
-        return {
-            "snapshot.png": snapshot(
-                [recording.positions[i] for i in idx],
-                [recording.links[i] for i in idx],
-                [f"t = {recording.position_steps[i] * dt_s:g} s" for i in idx],
-                path=path,
-                leader=self.leader,
-                world=world,
-            )
-        }
+        fig = team_snapshot(
+            recording,
+            world,
+            dt_s,
+            range_m=self.d_max_m,
+            leader=self.leader,
+            path=path,
+            path_label="leader's path",
+            title="silent: the team following its leader",
+        )
+        return {} if fig is None else {"snapshot.png": fig}
 
     def metrics(self) -> dict[str, Any]:
         out: dict[str, Any] = {

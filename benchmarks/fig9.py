@@ -1,0 +1,153 @@
+"""Fig. 9 of the continuous-connectivity paper, re-made: the multi-target campaign.
+
+Runs (resumably) the sweeps ``scenarios/paper/continuous_fig9_<scene>.yaml`` (team
+sizes x target configurations = run seeds) and draws the percentiles (10, 25, 50, 75,
+90) of the paper's four metrics against the team size, one column per scene:
+completion time, mean travelled distance of the explorers, largest distance between
+two explorers, and the mean weighted lambda2 over time. Writes
+``benchmarks/results/fig9.json`` (percentiles, trend statistics, completeness, the
+machine and wall times) and ``docs/figures/multi_target_fig9.png``.
+
+    python benchmarks/fig9.py --seeds 100                  # the paper's 1,800 trials
+    python benchmarks/fig9.py --seeds 5 --sizes 10 20 35   # a quick version
+    python benchmarks/fig9.py --seeds 5 --no-run           # figure from finished trials
+
+Trends (in the JSON): the ratio of the median completion time at the largest team to
+the smallest, Spearman's rank correlation of each metric with N over all trials (with
+its p-value, scipy.stats), and the share of trials that reached every target.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+from scipy import stats
+
+from tether.config import load_scenario
+from tether.experiments.sweep import run_sweep
+from tether.runfolder import machine
+from tether.viz.plots import plt
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ("empty", "town", "office")
+METRICS = (
+    ("completion_time_s", "completion time [s]"),
+    ("mean_explorer_distance_m", "mean travelled distance\nof the explorers [m]"),
+    ("max_explorer_stretch_m", "max distance between\ntwo explorers [m]"),
+    ("mean_lambda2_weighted", "mean lambda2"),
+)
+PERCENTILES = (10, 25, 50, 75, 90)
+
+
+def sweep_file(scene: str) -> Path:
+    return ROOT / "src" / "tether" / "scenarios" / "paper" / f"continuous_fig9_{scene}.yaml"
+
+
+def run_column(scene: str, out: Path, seeds: int, sizes: list[int], workers: int) -> float:
+    sc = load_scenario(sweep_file(scene))
+    sc.sweep = {"team.n_robots": sizes}
+    tic = time.perf_counter()
+    run_sweep(sc, out, seeds=seeds, executor="processes" if workers > 1 else "serial",
+              workers=workers, progress=lambda m: print(f"{scene}: {m}", flush=True))  # fmt: skip
+    return time.perf_counter() - tic
+
+
+def load_rows(out: Path, sizes: list[int], seeds: int) -> list[dict]:
+    rows = pq.read_table(out / "sweep.parquet").to_pylist()
+    return [r for r in rows if r["param:team.n_robots"] in sizes and r["seed"] < seeds]
+
+
+def summarise(rows: list[dict], sizes: list[int]) -> dict:
+    out: dict = {"trials": len(rows)}
+    complete = [r["targets_reached"] == r["targets_total"] for r in rows]
+    out["complete_share"] = float(np.mean(complete)) if rows else None
+    out["incomplete_trials"] = [
+        {"n_robots": r["param:team.n_robots"], "seed": r["seed"],
+         "reached": r["targets_reached"], "dropped": r["targets_dropped"]}
+        for r, ok in zip(rows, complete, strict=True) if not ok
+    ]  # fmt: skip
+    n = np.array([r["param:team.n_robots"] for r in rows])
+    for key, _ in METRICS:
+        vals = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+        per = {}
+        for size in sizes:
+            v = vals[(n == size) & np.isfinite(vals)]
+            per[str(size)] = [float(np.percentile(v, p)) for p in PERCENTILES] if len(v) else None
+        ok = np.isfinite(vals)
+        rho, p = stats.spearmanr(n[ok], vals[ok]) if ok.sum() > 2 else (np.nan, np.nan)
+        out[key] = {"percentiles": per, "spearman_rho": float(rho), "spearman_p": float(p)}
+    med = out["completion_time_s"]["percentiles"]
+    if med.get(str(sizes[0])) and med.get(str(sizes[-1])):
+        out["completion_median_ratio_last_first"] = med[str(sizes[-1])][2] / med[str(sizes[0])][2]
+    return out
+
+
+def figure(result: dict, sizes: list[int], path: Path) -> None:
+    fig, axes = plt.subplots(len(METRICS), len(SCENES), figsize=(11, 10), squeeze=False)
+    for col, scene in enumerate(SCENES):
+        entry = result["scenes"].get(scene)
+        for row, (key, label) in enumerate(METRICS):
+            ax = axes[row][col]
+            if entry is None:
+                ax.set_axis_off()
+                continue
+            per = entry[key]["percentiles"]
+            xs = [s for s in sizes if per.get(str(s))]
+            p = np.array([per[str(s)] for s in xs])
+            if len(xs):
+                ax.fill_between(xs, p[:, 0], p[:, 4], alpha=0.15, color="tab:blue",
+                                label="10-90 %")  # fmt: skip
+                ax.fill_between(xs, p[:, 1], p[:, 3], alpha=0.3, color="tab:blue",
+                                label="25-75 %")  # fmt: skip
+                ax.plot(xs, p[:, 2], "o-", color="tab:blue", label="median")
+            ax.set_xticks(sizes)
+            ax.grid(alpha=0.3)
+            if col == 0:
+                ax.set_ylabel(label)
+            if row == 0:
+                ax.set_title(f"{scene} ({entry['trials']} trials)")
+            if row == len(METRICS) - 1:
+                ax.set_xlabel("number of robots N")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=100, help="target configurations per N")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 15, 20, 25, 30, 35])
+    ap.add_argument("--scenes", nargs="+", default=list(SCENES))
+    ap.add_argument("--runs", type=Path, default=ROOT / "runs" / "fig9")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--no-run", action="store_true", help="only summarise finished trials")
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "fig9.json")
+    ap.add_argument("--figure", type=Path,
+                    default=ROOT / "docs" / "figures" / "multi_target_fig9.png")  # fmt: skip
+    a = ap.parse_args()
+    result: dict = {"machine": machine(), "seeds": a.seeds, "sizes": a.sizes, "scenes": {},
+                    "wall_time_s": {}}  # fmt: skip
+    for scene in a.scenes:
+        out = a.runs / scene
+        if not a.no_run:
+            result["wall_time_s"][scene] = run_column(scene, out, a.seeds, a.sizes, a.workers)
+        result["scenes"][scene] = summarise(load_rows(out, a.sizes, a.seeds), a.sizes)
+        s = result["scenes"][scene]
+        print(f"{scene}: {s['trials']} trials, complete {s['complete_share']}, completion "
+              f"median ratio N={a.sizes[-1]}/N={a.sizes[0]}: "
+              f"{s.get('completion_median_ratio_last_first')}", flush=True)  # fmt: skip
+    a.out.write_text(json.dumps(result, indent=1) + "\n")
+    figure(result, a.sizes, a.figure)
+    print(f"wrote {a.out} and {a.figure}")
+
+
+if __name__ == "__main__":
+    main()

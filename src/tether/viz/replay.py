@@ -1,0 +1,164 @@
+"""``tether view``: one self-contained HTML file replaying a run in 3-D.
+
+Everything the page needs is inside it: three.js r170 (vendored in
+``tether/viz/vendor``, inlined as a classic script), the replay's own scripts
+and the run's data (:mod:`tether.viz.payload`). A Content-Security-Policy of
+``default-src 'none'`` forbids the page from fetching anything, so it opens
+from ``file://`` offline and cannot call home. Why three.js rather than
+plotly: see ``docs/viewing.md``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import html
+import http.server
+import json
+import re
+import threading
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from tether.errors import TetherError
+from tether.viz.payload import build_payload
+from tether.viz.runfolder import RunData, load_run
+
+#: A 35-robot run of 10,000 steps must stay under 10 MB; the default aims lower.
+DEFAULT_BUDGET_BYTES = 8_000_000
+THREE_SHA256 = "08fd7545d13d2c7fb65ab691530a802dafefd638596501854f267d0fb13c39e7"
+
+
+@dataclass
+class Replay:
+    path: Path
+    bytes: int
+    n_frames: int
+    stride: int
+    seconds: float
+
+
+def _resource(*parts: str) -> str:
+    return resources.files("tether.viz").joinpath(*parts).read_text(encoding="utf-8")
+
+
+@lru_cache(maxsize=1)
+def three_script() -> str:
+    """three.js's one-file module build as a classic script defining the global ``THREE``."""
+    src = _resource("vendor", "three.module.min.js")
+    digest = hashlib.sha256(src.encode("utf-8")).hexdigest()
+    if digest != THREE_SHA256:
+        raise TetherError(f"tether/viz/vendor/three.module.min.js: unexpected content ({digest})")
+    match = re.search(r"export\s*\{([^}]*)\}\s*;?\s*$", src)
+    if match is None:
+        raise TetherError("tether/viz/vendor/three.module.min.js: not a one-file module build")
+    names = []
+    for item in match.group(1).split(","):
+        local, _, exported = item.strip().partition(" as ")
+        names.append(f"{(exported or local).strip()}:{local.strip()}")
+    body = src[: match.start()]
+    return (
+        'var THREE=(function(){"use strict";\n' + body + "\nreturn{" + ",".join(names) + "};})();"
+    )
+
+
+def _script_safe(text: str) -> str:
+    """Text that cannot close the ``<script>`` element it is placed in."""
+    return text.replace("</", "<\\/")
+
+
+def render_html(meta: dict[str, Any], blob_b64: str) -> str:
+    """The page: template + renderer + replay scripts + data."""
+    page = _resource("web", "replay.html")
+    parts = {
+        "__TITLE__": html.escape(str(meta.get("name", "run"))),
+        "__META__": _script_safe(json.dumps(meta, separators=(",", ":"))),
+        "__DATA__": blob_b64,
+        "__THREE__": _script_safe(three_script()),
+        "__SCENE__": _script_safe(_resource("web", "replay_scene.js")),
+        "__APP__": _script_safe(_resource("web", "replay_app.js")),
+    }
+    pattern = re.compile("|".join(re.escape(k) for k in parts))
+    return pattern.sub(lambda m: parts[m.group(0)], page)
+
+
+def _fixed_bytes() -> int:
+    empty = render_html({}, "")
+    return len(empty.encode("utf-8"))
+
+
+def write_replay(
+    run: RunData | str | Path,
+    out: str | Path | None = None,
+    *,
+    budget_bytes: int = DEFAULT_BUDGET_BYTES,
+) -> Replay:
+    """Write the replay of a run folder (default ``RUN_DIR/replay.html``).
+
+    Long runs are shown every k-th recorded step, the smallest k that keeps the
+    file within ``budget_bytes``.
+    """
+    start = time.perf_counter()
+    if not isinstance(run, RunData):
+        run = load_run(run)
+    if run.n_frames == 0:
+        raise TetherError(f"{run.path}: nothing to replay (robots.parquet has no rows)")
+    fixed = _fixed_bytes()
+    if budget_bytes < fixed + 50_000:
+        raise TetherError(f"--max-mb: too small; the page alone takes {fixed / 1e6:.2f} MB")
+    payload = build_payload(run, budget_bytes=budget_bytes, fixed_bytes=fixed)
+    text = render_html(payload.meta, payload.blob_b64)
+    out_path = Path(out) if out is not None else run.path / "replay.html"
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    out_path.write_text(text, encoding="utf-8")
+    size = out_path.stat().st_size
+    return Replay(
+        out_path, size, payload.n_frames_shown, payload.stride, time.perf_counter() - start
+    )
+
+
+class _OneFileHandler(http.server.BaseHTTPRequestHandler):
+    """Serves one file at ``/`` (and its own name); everything else is 404."""
+
+    body: bytes = b""
+    name: str = "replay.html"
+
+    def do_GET(self) -> None:  # noqa: N802 (http.server's naming)
+        if self.path.split("?", 1)[0] not in ("/", f"/{self.name}"):
+            self.send_error(404)
+            return
+        self.send_response(200)
+        self.send_header("Content-Type", "text/html; charset=utf-8")
+        self.send_header("Content-Length", str(len(self.body)))
+        self.end_headers()
+        self.wfile.write(self.body)
+
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002
+        pass
+
+
+def make_server(path: str | Path, port: int = 0) -> http.server.ThreadingHTTPServer:
+    """An HTTP server for one replay file, bound to 127.0.0.1 only (``port`` 0: any free)."""
+    file = Path(path)
+    handler = type("Handler", (_OneFileHandler,), {"body": file.read_bytes(), "name": file.name})
+    return http.server.ThreadingHTTPServer(("127.0.0.1", port), handler)
+
+
+def serve(path: str | Path, port: int = 0, *, announce: Any = print) -> None:
+    """Serve a replay on 127.0.0.1 until interrupted (Ctrl-C)."""
+    server = make_server(path, port)
+    host, real_port = server.server_address[:2]
+    announce(f"serving {path} at http://{host}:{real_port}/ (127.0.0.1 only; Ctrl-C stops)")
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        while thread.is_alive():
+            thread.join(0.5)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.shutdown()
+        server.server_close()
