@@ -1,10 +1,15 @@
-"""Cached line-of-sight clearance bounds: identical to the uncached search and to brute force."""
+"""Cached line-of-sight clearance bounds: identical to the uncached search and to brute force.
+
+The reference search's cache (numpy) is tested here; the compiled kernel's table in
+``tests/test_kernels.py``.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.weights import compute_weights
 from tether.geometry import point_segment_distance
@@ -36,8 +41,14 @@ def brute_clearance(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray
     )
 
 
+@pytest.fixture
+def reference_path():
+    with jit.using(False):
+        yield
+
+
 @pytest.mark.parametrize("seed", range(4))
-def test_cached_clearance_equals_uncached_and_brute_force(seed: int) -> None:
+def test_cached_clearance_equals_uncached_and_brute_force(seed: int, reference_path) -> None:
     rng = np.random.default_rng(seed)
     world = box_world(rng)
     cached = ObstacleIndex.from_world(world)
@@ -71,7 +82,15 @@ def test_cached_clearance_equals_uncached_and_brute_force(seed: int) -> None:
     assert skipped > 0  # the cache did settle some segments
 
 
-def test_cache_is_sound_for_a_different_team_with_the_same_keys() -> None:
+@pytest.mark.parametrize("kernel", [False, True])
+def test_cache_is_sound_for_a_different_team_with_the_same_keys(kernel: bool) -> None:
+    if kernel and not jit.available():
+        pytest.skip("numba is not installed")
+    with jit.using(kernel):
+        _same_keys_other_team()
+
+
+def _same_keys_other_team() -> None:
     rng = np.random.default_rng(9)
     world = box_world(rng)
     index = ObstacleIndex.from_world(world)

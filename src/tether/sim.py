@@ -29,7 +29,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict
 from threadpoolctl import threadpool_limits
 
-from tether.graph import algebraic_connectivity, components, pairs_within
+from tether import jit
+from tether.graph import component_count, fiedler, pairs_within
 from tether.sensing import Observation, SensorModel, sense
 from tether.world.world import World
 
@@ -225,16 +226,40 @@ def team_metrics(
     station). Collisions count robot pairs closer than ``collision_distance_m``.
     """
     n = obs.n
-    n_comp, _ = components(n, obs.pairs)
-    lam = float("nan")
-    if n <= LAMBDA2_MAX_N:  # full dense eigh up to 400 nodes: the recorded values since 0.1
-        lam = algebraic_connectivity(n, obs.pairs, method="dense" if n <= 400 else "sparse")
+    n_comp, lam = _graph_metrics(n, obs.pairs)
     close = pairs_within(positions, collision_distance_m) if collision_distance_m > 0 else []
     if n > 1 and len(obs.pairs):
         d = np.linalg.norm(obs.true_relative, axis=1).min()
     else:
         d = float("inf")
     return StepRecord(step, t_s, n_comp <= 1, n_comp, len(obs.pairs), lam, float(d), len(close))
+
+
+#: the last graph's metrics: a team's sensing graph often stays the same for many steps
+_GRAPH_CACHE: dict[str, Any] = {"key": None, "value": None}
+
+
+def _graph_metrics(n: int, pairs: np.ndarray) -> tuple[int, float]:
+    """Components and lambda2 of the unweighted graph, reused while the graph is unchanged.
+
+    Both depend only on ``n`` and the links, so an unchanged graph (same links in the
+    same order) gets exactly the values computed for it before.
+    """
+    pairs = np.ascontiguousarray(pairs)
+    key = (n, pairs.shape, pairs.dtype.str, pairs.tobytes())
+    if _GRAPH_CACHE["key"] == key:
+        return _GRAPH_CACHE["value"]
+    n_comp = component_count(n, pairs)
+    lam = float("nan")
+    if n <= LAMBDA2_MAX_N:  # full dense eigh up to 400 nodes: the recorded values since 0.1
+        lap = None
+        if jit.warm() and n <= 400:  # the same matrix, compiled
+            from tether.graph.kernels import laplacian_dense_kernel
+
+            lap = laplacian_dense_kernel(n, pairs.astype(np.int64), np.ones(len(pairs)))
+        lam = fiedler(n, pairs, method="dense" if n <= 400 else "sparse", laplacian=lap)[0]
+    _GRAPH_CACHE["key"], _GRAPH_CACHE["value"] = key, (n_comp, lam)
+    return n_comp, lam
 
 
 @dataclass

@@ -60,6 +60,8 @@ from typing import Any
 
 import numpy as np
 
+from tether import jit
+
 
 @dataclass(frozen=True)
 class IntegratorParams:
@@ -174,17 +176,28 @@ def integrate(
     m, b = params.mass_kg, params.damping_ns_per_m
     ev = current if current is not None else evaluate(q)
     t = 0.0
+    kernels = jit.enabled()  # the same arithmetic, compiled (tether.continuous.kernels)
+    if kernels:
+        from tether.continuous.kernels import displacement_kernel, euler_kernel
+
+        corners = np.zeros((0, q.shape[1])) if box is None else np.ascontiguousarray(box, float)
     while t < dt_s * (1 - 1e-12) and stats.substeps < params.max_substeps:
         lam = ev[0]
         f_lambda = force(ev[1])
         total = f_lambda + (external(q, v, f_lambda) if callable(external) else external)
-        h = min(dt_s - t, displacement_step(v, total, m, params.max_step_m))
+        if kernels:
+            h = min(dt_s - t, displacement_kernel(v, total, m, params.max_step_m))
+        else:
+            h = min(dt_s - t, displacement_step(v, total, m, params.max_step_m))
         floor = lambda2_min + params.keep_fraction * (lam - lambda2_min)
         accepted = False
         for _ in range(params.max_halvings + 1):
-            q_new, v_new = semi_implicit_euler(q, v, total, h, m, b)
-            if box is not None:
-                q_new, v_new = stay_inside(q, q_new, v_new, box, box_margin_m)
+            if kernels:
+                q_new, v_new = euler_kernel(q, v, total, h, m, b, corners, box_margin_m)
+            else:
+                q_new, v_new = semi_implicit_euler(q, v, total, h, m, b)
+                if box is not None:
+                    q_new, v_new = stay_inside(q, q_new, v_new, box, box_margin_m)
             ev_new = evaluate(q_new)
             if ev_new[0] > floor and ev_new[0] > lambda2_min + params.lambda2_tolerance:
                 accepted = True

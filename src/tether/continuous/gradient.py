@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import potential_slope
 from tether.continuous.weights import WeightedGraph
@@ -60,6 +61,11 @@ class Messages:
 
 def edge_energy(graph: WeightedGraph, nu: np.ndarray) -> np.ndarray:
     """``T_i = sum_j W_ij (nu_i - nu_j)^2`` per robot (computable by robot ``i``)."""
+    if jit.enabled():
+        from tether.continuous.kernels import edge_energy_kernel
+
+        return edge_energy_kernel(graph.n, graph.pairs, graph.pair_factor, graph.collision,
+                                  np.ascontiguousarray(nu, dtype=float))  # fmt: skip
     i, j = graph.pairs[:, 0], graph.pairs[:, 1]
     e = graph.weights * (nu[i] - nu[j]) ** 2
     return np.bincount(i, e, graph.n) + np.bincount(j, e, graph.n)
@@ -79,6 +85,14 @@ def lambda2_gradient(graph: WeightedGraph, msg: Messages) -> np.ndarray:
     With ``msg = messages(graph, nu)`` for the exact unit Fiedler vector it is
     the exact gradient of lambda2 (where lambda2 is simple).
     """
+    if jit.enabled() and graph.dP_di.ndim == 2:
+        from tether.continuous.kernels import gradient_kernel
+
+        return gradient_kernel(
+            graph.n, graph.pairs, graph.dP_di, graph.dP_dj, graph.coll_pairs, graph.coll_unit,
+            graph.coll_logd, np.ascontiguousarray(msg.nu, dtype=float), msg.collision,
+            msg.edge_energy,
+        )  # fmt: skip
     dim = graph.dP_di.shape[1] if graph.dP_di.ndim == 2 else 0
     grad = np.zeros((graph.n, dim))
     i, j = graph.pairs[:, 0], graph.pairs[:, 1]
@@ -102,4 +116,10 @@ def connectivity_force(
     ``lambda2`` may be a scalar or each robot's own estimate ``(n,)``.
     """
     lam = np.broadcast_to(np.asarray(lambda2, dtype=float), (graph.n,))
-    return -potential_slope(lam, params)[:, None] * lambda2_gradient(graph, msg)
+    grad = lambda2_gradient(graph, msg)
+    if jit.enabled():
+        from tether.continuous.kernels import force_kernel
+
+        return force_kernel(grad, np.ascontiguousarray(lam), params.lambda2_min,
+                            params.lambda2_null, params.potential_gain)  # fmt: skip
+    return -potential_slope(lam, params)[:, None] * grad

@@ -23,6 +23,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from tether import jit
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.consensus import EfficiencyConsensus
 from tether.continuous.dynamics import integrate
@@ -122,6 +123,7 @@ def traveling_forces(
     planner: RolePlanner,
     lambda_hat: np.ndarray,
     p: MultiTargetParams,
+    anchors: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """``f_i`` of Algorithm 2 for every robot, ``(n, dim)``.
 
@@ -129,7 +131,13 @@ def traveling_forces(
     ``rho(Theta(f_lambda_i, f_travel_i), Lambda_hat_i, sigma) f_travel`` (eqs.
     (4), (8), (14), (15)); anchors ``f_anchor`` (eq. (7)). Robot ``i``'s row
     uses only its own state, path and target, ``f_lambda_i`` and ``Lambda_hat_i``.
+    ``anchors``: the anchored robots and their targets, if the caller has them.
     """
+    if anchors is None:
+        held = np.flatnonzero(planner.anchored())
+        anchors = held, _targets(planner, held, q.shape[1])
+    if jit.enabled():
+        return _traveling_forces_kernel(q, v, f_lambda, planner, lambda_hat, p, anchors)
     f = np.zeros_like(q)
     role = planner.role
     trav, paths = planner.path_set()  # the travelers: prime and secondaries on their way
@@ -142,10 +150,46 @@ def traveling_forces(
         scale = np.ones(len(trav))
         scale[sec] = rho(alignment(f_lambda[trav[sec]], ft[sec]), lambda_hat[trav[sec]], p.sigma)
         f[trav] = scale[:, None] * ft
-    held = np.flatnonzero(planner.anchored())
+    held, targets = anchors
     if len(held):
-        f[held] = anchor_force(q[held], planner.targets_of(held), p.rz_m, p.kz_n)
+        f[held] = anchor_force(q[held], targets, p.rz_m, p.kz_n)
     return f
+
+
+def _targets(planner: RolePlanner, robots: np.ndarray, dim: int) -> np.ndarray:
+    return planner.targets_of(robots) if len(robots) else np.zeros((0, dim))
+
+
+def _traveling_forces_kernel(
+    q: np.ndarray,
+    v: np.ndarray,
+    f_lambda: np.ndarray,
+    planner: RolePlanner,
+    lambda_hat: np.ndarray,
+    p: MultiTargetParams,
+    anchors: tuple[np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """:func:`traveling_forces` in one call of the compiled kernel (same bits)."""
+    from tether.continuous.tracking import TIE_M
+    from tether.continuous.tracking_kernels import traveling_kernel
+    from tether.world.clearance import einsum_order
+
+    trav, paths = planner.path_set()
+    trav = trav.astype(np.int64)
+    held, targets = anchors[0].astype(np.int64), anchors[1]
+    path = paths.kernel_args() if len(trav) else _NO_PATHS
+    return traveling_kernel(
+        np.ascontiguousarray(q), np.ascontiguousarray(v), np.ascontiguousarray(f_lambda), trav,
+        planner.role[trav] == SECONDARY, np.ascontiguousarray(lambda_hat, dtype=float), held,
+        np.ascontiguousarray(targets, dtype=float), path, float(p.v_cruise_mps), TIE_M,
+        einsum_order(), p.kp_n_per_m, p.kv_ns_per_m, p.mass_kg, p.damping_ns_per_m,
+        p.max_travel_force_n, p.sigma, p.rz_m, p.kz_n,
+    )  # fmt: skip
+
+
+_i0, _f1, _f2 = np.zeros(1, np.int64), np.zeros(0), np.zeros((0, 3))
+#: path arguments of the traveling kernel when nobody travels (the types of a PathSet's)
+_NO_PATHS = (_i0, _f2, _f2, _f1, _f1, _f1, _f2, _f2, _f2, _f2, _f1, _f1, _f1, _i0[:0])
 
 
 @STRATEGIES.register("multi_target")
@@ -234,12 +278,20 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._elections = 0
         self._filter_dev = 0.0
         self._prime_eff = 1.0
+        self._held: tuple[np.ndarray, np.ndarray] | None = None
         self._current = self._evaluate(state.positions)
+
+    def _anchors(self) -> tuple[np.ndarray, np.ndarray]:
+        """The anchored robots and their targets (fixed while a period is integrated)."""
+        if self._held is not None:
+            return self._held
+        held = np.flatnonzero(self.planner.anchored())
+        return held, _targets(self.planner, held, self.world.dim)
 
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
         lam, cache = super()._evaluate(q)
-        held = np.flatnonzero(self.planner.anchored())
-        if len(held) and np.any(np.linalg.norm(q[held] - self.planner.targets_of(held), axis=1)
+        held, targets = self._anchors()
+        if len(held) and np.any(np.linalg.norm(q[held] - targets, axis=1)
                                 >= self.params.rz_m):  # fmt: skip
             return -np.inf, cache  # an anchor would leave its ball: reject the sub-step
         return lam, cache
@@ -291,16 +343,20 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._step = ctx.step
         q, v = ctx.state.positions, ctx.state.velocities
         self._communicate(q, v, ctx.t_s, ctx.dt_s)
+        self._held = self._anchors()  # roles and targets do not change until the next period
 
         def external(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray) -> np.ndarray:
             return traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate,
-                                    self.params)  # fmt: skip
+                                    self.params, anchors=self._held)  # fmt: skip
 
-        q_new, v_new, ev, stats = integrate(
-            q, v, ctx.dt_s, self._evaluate, self._force, external, self.integ,
-            self.conn.lambda2_min, self._current, box=self.world.bounds_m,
-            box_margin_m=self.conn.ro_m,
-        )  # fmt: skip
+        try:
+            q_new, v_new, ev, stats = integrate(
+                q, v, ctx.dt_s, self._evaluate, self._force, external, self.integ,
+                self.conn.lambda2_min, self._current, box=self.world.bounds_m,
+                box_margin_m=self.conn.ro_m,
+            )  # fmt: skip
+        finally:
+            self._held = None
         self._current = ev
         self._stats["substeps"] += stats.substeps
         self._stats["rejections"] += stats.rejections

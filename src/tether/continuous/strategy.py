@@ -351,10 +351,9 @@ class ConnectivityStrategy(Strategy):
         if len(graph.pairs):
             d = np.linalg.norm(q[graph.pairs[:, 0]] - q[graph.pairs[:, 1]], axis=1)
             self._min["distance"] = min(self._min["distance"], float(d.min()))
-        if self.obstacles.tree is not None:
-            self._min["clearance"] = min(
-                self._min["clearance"], float(self.obstacles.tree.query(q)[0].min())
-            )
+        if self.obstacles.tree is not None:  # robots the field puts farther are not searched
+            low = self._min["clearance"]
+            self._min["clearance"] = min(low, self.obstacles.nearest_min(q, low))
         if self.estimator is not None and nu is not None:
             self._est_err.append(estimate_errors(self.estimator, lam, nu))
 

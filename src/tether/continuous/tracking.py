@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tether import jit
 from tether.paths.bspline import SplinePath
 
 DEFAULT_SPACING_M = 0.1
@@ -93,6 +94,7 @@ class PathSet:
         self.ta, self.dt = tangent[a], tangent[a + 1] - tangent[a]
         self.ka, self.dk = curv[a], curv[a + 1] - curv[a]
         self.lengths = np.array([p.length_m for p in paths])
+        self._kernel: tuple[np.ndarray, ...] | None = None  # the kernel's arrays, made once
 
     def states(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
         """Closest point (largest arc length among ties) and virtual point of each robot.
@@ -106,6 +108,8 @@ class PathSet:
         if self.r == 0:
             z = np.zeros((0, dim))
             return PathState(np.zeros(0), z, np.zeros(0), np.zeros(0), z, z)
+        if jit.enabled():
+            return self._states_kernel(q, v_cruise_mps)
         rel = q[self.who] - self.pa
         t = np.clip(np.einsum("kd,kd->k", rel, self.d) * self.inv_len2, 0.0, 1.0)
         off = rel - t[:, None] * self.d  # q - foot
@@ -129,6 +133,36 @@ class PathSet:
             velocity_mps=speed[:, None] * tan,
             acceleration_mps2=(speed**2)[:, None] * kap,
         )
+
+    def kernel_args(self) -> tuple[np.ndarray, ...]:
+        """The arrays :func:`~tether.continuous.tracking_kernels.path_states_kernel` reads.
+
+        Segment ranges per path, the segment arrays, cumulative chord lengths (for its
+        skipping) and each path's last closest segment (a hint it updates); made once.
+        """
+        if self._kernel is None:
+            bounds = np.r_[self.first, len(self.a)].astype(np.int64)
+            chord = np.sqrt(np.einsum("kd,kd->k", self.d, self.d))
+            end = np.cumsum(chord)
+            start = end - chord
+            offset = np.repeat(start[self.first], np.diff(bounds))  # each path from 0
+            self._kernel = (bounds, self.pa, self.d, self.inv_len2, self.sa, self.ds, self.ta,
+                            self.dt, self.ka, self.dk, self.lengths, start - offset,
+                            end - offset, np.full(self.r, -1))  # fmt: skip
+        return self._kernel
+
+    def _states_kernel(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
+        """:meth:`states` by :func:`tether.continuous.kernels.path_states_kernel` (same bits)."""
+        from tether.continuous.tracking_kernels import path_states_kernel
+        from tether.world.clearance import einsum_order
+
+        args = self.kernel_args()
+        speed = np.broadcast_to(np.asarray(v_cruise_mps, dtype=float), (self.r,))
+        out = path_states_kernel(
+            np.ascontiguousarray(q, dtype=float), *args[:11], np.ascontiguousarray(speed), TIE_M,
+            einsum_order(), *args[11:],
+        )  # fmt: skip
+        return PathState(*out)
 
 
 def path_states(

@@ -26,13 +26,14 @@ from the world layer's :class:`tether.world.clearance.ObstacleIndex`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import smooth_step, smooth_step_log_derivative
-from tether.graph import fiedler, laplacian_dense, pairs_within
+from tether.graph import SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within
 from tether.world.clearance import ObstacleIndex
 
 
@@ -59,9 +60,15 @@ class WeightedGraph:
     coll_unit: np.ndarray
     coll_logd: np.ndarray
 
+    # the kernels' W and dense Laplacian, when they computed them (same bits)
+    _weights: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _laplacian: np.ndarray | None = field(default=None, repr=False, compare=False)
+
     @property
     def weights(self) -> np.ndarray:
         """``W_ij = P_ij C_i C_j`` per pair."""
+        if self._weights is not None:
+            return self._weights
         return (
             self.pair_factor * self.collision[self.pairs[:, 0]] * self.collision[self.pairs[:, 1]]
         )
@@ -82,7 +89,13 @@ class WeightedGraph:
         ``guess`` (a previous Fiedler vector) fixes the sign of the result and,
         above ``SUBSET_MAX_N`` robots, is the certified warm start.
         """
-        return fiedler(self.n, self.pairs, self.weights, guess=guess)
+        w = self.weights
+        lap = self._laplacian
+        if lap is None and jit.enabled() and self.n <= SUBSET_MAX_N:  # compiled, same matrix
+            from tether.graph.kernels import laplacian_dense_kernel
+
+            lap = laplacian_dense_kernel(self.n, self.pairs, w)
+        return fiedler(self.n, self.pairs, w, guess=guess, laplacian=lap)
 
 
 def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.ndarray:
@@ -119,8 +132,89 @@ def compute_weights(
     pairs
         Optional precomputed pairs within ``Rs`` (``i < j``); found with a
         k-d tree otherwise.
+
+    With :func:`tether.jit.enabled`, the kernels of :mod:`tether.continuous.kernels`
+    compute the same arrays (to the last bit) without numpy's per-call overhead.
     """
     q = np.asarray(positions, dtype=float)
+    if jit.enabled():
+        return _compute_weights_kernel(q, params, obstacles, pairs)
+    return _compute_weights_reference(q, params, obstacles, pairs)
+
+
+def _compute_weights_kernel(
+    q: np.ndarray,
+    params: ConnectivityParams,
+    obstacles: ObstacleIndex | None,
+    pairs: np.ndarray | None,
+) -> WeightedGraph:
+    """:func:`compute_weights` by the kernels of :mod:`tether.continuous.kernels` (same bits)."""
+    from tether.continuous import kernels as k
+
+    q = np.ascontiguousarray(q)
+    n = len(q)
+    if pairs is None:
+        return _evaluate_kernel(q, params, obstacles)
+    else:
+        pairs = k.pairs_below(q, np.asarray(pairs, dtype=np.int64).reshape(-1, 2), params.rs_m)
+    has_obstacles = obstacles is not None and len(pairs) > 0
+    if has_obstacles:
+        i, j = pairs[:, 0], pairs[:, 1]
+        clear, s_star, o_star = obstacles.segment_clearance(
+            q[i], q[j], params.ro_outer_m, keys=i * n + j
+        )
+    else:
+        clear, s_star, o_star = _NO_CLEARANCE
+    pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd = k.weights_kernel(
+        q, pairs, has_obstacles, clear, s_star, o_star, params.rs_inner_m, params.rs_m,
+        params.ro_m, params.ro_outer_m, params.rc_m, params.rc_outer_m,
+    )  # fmt: skip
+    return WeightedGraph(n, pairs, pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit,
+                         coll_logd)  # fmt: skip
+
+
+_NO_CLEARANCE = (np.zeros(0), np.zeros(0), np.zeros((0, 3)))
+
+
+def _evaluate_kernel(
+    q: np.ndarray, params: ConnectivityParams, obstacles: ObstacleIndex | None
+) -> WeightedGraph:
+    """Pairs, clearance, weights, ``W`` and the dense Laplacian in one kernel call."""
+    from tether.continuous.kernels import evaluate_kernel, no_obstacles
+    from tether.world.clearance import einsum_order
+
+    n, dim = q.shape
+    has = obstacles is not None and obstacles.tree is not None and n > 1
+    estimate = min(n * (n - 1) // 2, 32 * n)
+    slack = obstacles.cache_slack_m if has else 0.0
+    for _ in range(2):
+        points, tree, table, used, fld = obstacles.kernel_state(estimate) if has else \
+            no_obstacles(dim)  # fmt: skip
+        out = evaluate_kernel(
+            q, params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
+            params.rc_outer_m, n <= SUBSET_MAX_N, has, points, tree, table, used, slack, fld,
+            einsum_order(),
+        )  # fmt: skip
+        if out[-1] >= 0:
+            break
+        estimate = len(out[8])
+        obstacles.kernel_grow(estimate)
+    pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added = out
+    if has:
+        obstacles.kernel_added(added)
+    elif obstacles is not None and len(pairs):  # an index without points: the obstacle branch
+        return _compute_weights_kernel(q, params, obstacles, pairs)
+    return WeightedGraph(n, pairs, pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit,
+                         coll_logd, w, lap if n <= SUBSET_MAX_N else None)  # fmt: skip
+
+
+def _compute_weights_reference(
+    q: np.ndarray,
+    params: ConnectivityParams,
+    obstacles: ObstacleIndex | None,
+    pairs: np.ndarray | None,
+) -> WeightedGraph:
+    """The numpy reference of :func:`compute_weights`."""
     n, dim = q.shape
     if pairs is None:
         pairs = pairs_within(q, params.rs_m)

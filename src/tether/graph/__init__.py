@@ -14,6 +14,7 @@ here is plain arrays and sparse matrices, so that 10,000-robot teams stay cheap.
 from tether.graph.fiedler import DENSE_MAX_N, SUBSET_MAX_N, algebraic_connectivity, fiedler
 from tether.graph.structure import (
     adjacency,
+    component_count,
     components,
     expand_rows,
     is_connected,
@@ -29,6 +30,7 @@ __all__ = [
     "SUBSET_MAX_N",
     "adjacency",
     "algebraic_connectivity",
+    "component_count",
     "components",
     "expand_rows",
     "fiedler",

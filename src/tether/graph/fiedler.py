@@ -8,10 +8,12 @@ eigenvector is the Fiedler vector. One public function, :func:`fiedler`, with
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Literal
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 from scipy.sparse.linalg import eigsh
 
 from tether.graph.structure import components, laplacian, laplacian_dense
@@ -27,13 +29,35 @@ SUBSET_MAX_N = 400  # "auto": only the second eigenpair (LAPACK syevr) up to thi
 _TINY_REL = 1e-9
 
 
-def _dense(lap: np.ndarray) -> tuple[float, np.ndarray]:
-    vals, vecs = np.linalg.eigh(lap)
+def _dense(
+    n: int, pairs: np.ndarray, w: np.ndarray | None, lap: np.ndarray | None = None
+) -> tuple[float, np.ndarray]:
+    vals, vecs = np.linalg.eigh(laplacian_dense(n, pairs, w) if lap is None else lap)
     return max(float(vals[1]), 0.0), vecs[:, 1]
 
 
-def _subset(lap: np.ndarray) -> tuple[float, np.ndarray]:
-    vals, vecs = scipy.linalg.eigh(lap, subset_by_index=[1, 1], driver="evr", check_finite=False)
+@cache
+def _syevr_lwork(n: int) -> tuple[int, int]:
+    lw = scipy.linalg.lapack.dsyevr_lwork(n, lower=True)
+    return int(lw[0]), int(lw[1])
+
+
+def _subset(
+    n: int, pairs: np.ndarray, w: np.ndarray | None, lap: np.ndarray | None = None
+) -> tuple[float, np.ndarray]:
+    """The second eigenpair by LAPACK ``dsyevr`` (MRRR), called directly.
+
+    Exactly the call ``scipy.linalg.eigh(L, subset_by_index=[1, 1], driver="evr")``
+    makes (same routine, arguments and workspace, so the same bits), without its
+    argument checking, which cost more than the solve for a 35-robot team.
+    """
+    lwork, liwork = _syevr_lwork(n)
+    a = laplacian_dense(n, pairs, w) if lap is None else lap
+    vals, vecs, m, _, info = scipy.linalg.lapack.dsyevr(
+        a, compute_v=1, range="I", il=2, iu=2, lower=1, lwork=lwork, liwork=liwork
+    )
+    if info != 0 or m != 1:
+        vals, vecs = scipy.linalg.eigh(a, subset_by_index=[1, 1], driver="evr", check_finite=False)
     return max(float(vals[0]), 0.0), vecs[:, 0]
 
 
@@ -65,6 +89,7 @@ def fiedler(
     *,
     method: Method = "auto",
     guess: np.ndarray | None = None,
+    laplacian: np.ndarray | None = None,
 ) -> tuple[float, np.ndarray]:
     """lambda2 and a unit Fiedler vector of a (weighted) graph.
 
@@ -88,6 +113,9 @@ def fiedler(
         A previous Fiedler vector: it fixes the sign of the result (so that a
         warm estimator or a finite-difference test sees a continuous vector)
         and is the warm start of ``"warm"``.
+    laplacian
+        ``laplacian_dense(n, pairs, weights)`` if the caller has it already (the
+        dense solvers then skip building it; it must be exactly that matrix).
 
     Returns
     -------
@@ -120,18 +148,21 @@ def fiedler(
         vec = _component_vector(n, pairs, w)  # shift-invert Lanczos needs a connected graph
         if vec is not None:
             return 0.0, vec
-    scale = None  # the largest degree, for the check of a tiny lambda2
+    lap = None
     if method in ("dense", "subset"):
-        lap = laplacian_dense(n, pairs, w)
-        lam, vec = _dense(lap) if method == "dense" else _subset(lap)
-        scale = float(lap.diagonal().max()) if len(pairs) else 1.0  # the degrees
+        lap = laplacian_dense(n, pairs, w) if laplacian is None else laplacian
+        lam, vec = _dense(n, pairs, w, lap) if method == "dense" else _subset(n, pairs, w, lap)
     elif method == "sparse":
         lam, vec = _sparse(n, pairs, w)
     elif method == "warm":
         lam, vec = warm
     else:
         raise ValueError(f"unknown method {method!r}; expected auto, dense, subset, sparse or warm")
-    if method != "sparse" and lam <= _TINY_REL * (scale or _max_degree(n, pairs, w)):
+    if (
+        method != "sparse"
+        and _maybe_tiny(lam, pairs, w, lap)
+        and lam <= _TINY_REL * _max_degree(n, pairs, w)
+    ):
         comp = _component_vector(n, pairs, w)
         if comp is not None and method == "warm":
             return 0.0, comp  # as "sparse" returns it
@@ -140,6 +171,20 @@ def fiedler(
     if guess is not None and float(vec @ guess) < 0:
         vec = -vec
     return lam, vec
+
+
+def _maybe_tiny(
+    lam: float, pairs: np.ndarray, w: np.ndarray | None, lap: np.ndarray | None
+) -> bool:
+    """False only where ``lam <= _TINY_REL * _max_degree(...)`` is surely false.
+
+    Every degree is at most the largest diagonal entry of the Laplacian (its degrees,
+    summed in another order: the margin covers the rounding), so a ``lam`` above
+    that bound skips the ``bincount`` of :func:`_max_degree`.
+    """
+    if lap is None or len(pairs) == 0:
+        return True
+    return lam <= _TINY_REL * float(np.max(np.diagonal(lap))) * (1.0 + 1e-6)
 
 
 def _max_degree(n: int, pairs: np.ndarray, w: np.ndarray | None) -> float:

@@ -11,15 +11,27 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
+from tether import jit
+
+#: up to this many robots, :func:`pairs_within` tests all pairs in a compiled kernel
+#: once numba is loaded (:func:`tether.jit.warm`); a k-d tree's set-up costs more there
+KERNEL_PAIRS_MAX_N = 200
+
 
 def pairs_within(positions: np.ndarray, range_m: float) -> np.ndarray:
     """All pairs ``(i, j)``, ``i < j``, with ``||p_i - p_j|| <= range_m``.
 
-    Uses a k-d tree, so the cost is ``O(n log n + m)`` rather than all-pairs.
+    Uses a k-d tree, so the cost is ``O(n log n + m)`` rather than all-pairs; small
+    teams are tested pair by pair when compiled kernels are loaded
+    (:func:`tether.graph.kernels.pairs_within_kernel`, the same squared-distance test).
     """
     positions = np.asarray(positions, dtype=float)
     if len(positions) < 2:
         return np.empty((0, 2), dtype=np.intp)
+    if jit.warm() and len(positions) <= KERNEL_PAIRS_MAX_N:
+        from tether.graph.kernels import pairs_within_kernel
+
+        return pairs_within_kernel(np.ascontiguousarray(positions), float(range_m))
     tree = cKDTree(positions)
     pairs = tree.query_pairs(r=float(range_m), output_type="ndarray")
     if len(pairs) == 0:
@@ -82,6 +94,17 @@ def components(n: int, pairs: np.ndarray) -> tuple[int, np.ndarray]:
         return 0, np.empty(0, dtype=np.intp)
     count, labels = connected_components(adjacency(n, pairs), directed=False)
     return int(count), labels
+
+
+def component_count(n: int, pairs: np.ndarray) -> int:
+    """Number of connected components (:func:`components` without the labels)."""
+    if n == 0:
+        return 0
+    if jit.warm():
+        from tether.graph.kernels import component_count_kernel
+
+        return int(component_count_kernel(n, np.asarray(pairs, dtype=np.int64).reshape(-1, 2)))
+    return components(n, pairs)[0]
 
 
 def is_connected(n: int, pairs: np.ndarray) -> bool:

@@ -4,17 +4,20 @@ The continuous-connectivity paper models obstacles as a point set ``O``; the
 line-of-sight clearance of a segment, ``min_(s, o) ||a + s (b - a) - o||``,
 decides whether two robots see each other (App. A). :class:`ObstacleIndex`
 answers it exactly with a k-d tree, pre-screened by an occupancy grid's
-distance field and a cache of bounds from the previous call.
+distance field and a cache of bounds from the previous call (the reference search), or
+with the compiled kernel of :mod:`tether.world.clearance_kernels` when
+:func:`tether.jit.enabled` (the same results, see :meth:`ObstacleIndex.segment_clearance`).
 """
 
 from __future__ import annotations
 
-from functools import cached_property
+from functools import cache, cached_property
 from itertools import chain
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from tether import jit
 from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
@@ -35,6 +38,17 @@ def sample_segments(
     return seg, a[seg] + frac[:, None] * (b - a)[seg], length / np.maximum(n_samp - 1, 1)
 
 
+@cache
+def einsum_order() -> int:
+    """1 if ``numpy.einsum("kd,kd->k")`` sums three terms as ``(x0 + x2) + x1``, else 0.
+
+    numpy's summation order for short rows depends on its SIMD build (two-lane
+    vectors give this one); the kernels that reproduce an einsum follow it.
+    """
+    x = np.array([[1.0, 2.0**-53, -1.0]])
+    return int(np.einsum("kd,kd->k", x, np.ones((1, 3)))[0] != 0.0)
+
+
 class ObstacleIndex:
     """The obstacle point set ``O`` with a k-d tree, and an optional grid pre-screen.
 
@@ -50,7 +64,7 @@ class ObstacleIndex:
     """
 
     def __init__(self, points: np.ndarray, dim: int, grid: OccupancyGrid | None = None) -> None:
-        self.points = np.asarray(points, dtype=float).reshape(-1, dim)
+        self.points = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, dim))
         self.dim = dim
         self.grid = grid if len(self.points) else None
         self.tree = cKDTree(self.points) if len(self.points) else None
@@ -101,6 +115,25 @@ class ObstacleIndex:
         cells = np.floor((pts - self.grid.origin_m) / self.grid.resolution_m).astype(np.intp)
         ok = np.all((cells >= 0) & (cells < shape), axis=1)
         return np.where(ok, flat[np.where(ok, cells @ strides, 0)], 0.0)
+
+    def nearest_min(self, points: np.ndarray, below_m: float = np.inf) -> float:
+        """``min_k`` distance from ``points[k]`` to ``O``, where it may be below ``below_m``.
+
+        Exactly ``tree.query(points)[0].min()`` whenever that can be below ``below_m``;
+        ``inf`` when the distance field proves every point at least ``below_m`` (plus
+        1e-9 m for rounding) away, so ``min(below_m, nearest_min(q, below_m))`` always
+        equals ``min(below_m, tree.query(q)[0].min())``. Only the points the field does
+        not settle are searched. ``inf`` without obstacle points.
+        """
+        if self.tree is None:
+            return float("inf")
+        points = np.asarray(points, dtype=float).reshape(-1, self.dim)
+        if self.grid is not None and np.isfinite(below_m):
+            margin = (1.0 if self._centred else 2.0) * self._half_diag_m
+            points = points[self._field_at(points) - margin < below_m + 1e-9]
+            if not len(points):
+                return float("inf")
+        return float(self.tree.query(points)[0].min())
 
     def _lower_bound(
         self, a: np.ndarray, b: np.ndarray, within_m: float | None = None
@@ -187,7 +220,7 @@ class ObstacleIndex:
         known = self._cached_bound(keys, a, b, cache)
         todo = np.flatnonzero(known < within_m)
         reach = within_m + self.cache_slack_m
-        d, s, o = self.segment_clearance(a[todo], b[todo], reach)
+        d, s, o = self._segment_clearance_reference(a[todo], b[todo], reach)
         near = d < within_m
         dist[todo[near]], param[todo[near]], closest[todo[near]] = d[near], s[near], o[near]
         # carried segments keep their old endpoints and bounds; searched ones start afresh
@@ -211,11 +244,18 @@ class ObstacleIndex:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Clearance of segments ``a[k] -> b[k]`` from ``O`` where it is below ``within_m``.
 
+        The compiled kernel (:func:`tether.world.clearance_kernels.segments_nearest`)
+        runs when :func:`tether.jit.enabled`, else the reference search
+        (:meth:`_segment_clearance_reference`); both give the same bits: the
+        least distance over all obstacle points, computed with the same
+        arithmetic, ties to the lowest point index.
+
         With ``keys`` (distinct integers naming the segments, e.g. robot pair
-        codes), lower bounds from the previous call with keys are reused: a
-        segment whose cached bound minus its endpoints' displacement is still
-        ``>= within_m`` is settled without any search (see
-        :meth:`_cached_bound`). The result is identical to the uncached one.
+        codes), the reference search reuses lower bounds from its previous call
+        with keys: a segment whose cached bound minus its endpoints'
+        displacement is still ``>= within_m`` is settled without any search
+        (see :meth:`_cached_bound`). The result is identical to the uncached
+        one. The kernel keeps its own cache (:meth:`segment_clearance_kernel`).
 
         Returns
         -------
@@ -224,6 +264,104 @@ class ObstacleIndex:
             parameter ``s*`` of the closest segment point and ``(k, dim)``
             the closest obstacle point (undefined where ``dist`` is ``inf``).
         """
+        if jit.enabled():
+            return self.segment_clearance_kernel(a, b, within_m, keys)
+        return self._segment_clearance_reference(a, b, within_m, keys)
+
+    @cached_property
+    def _kernel_tree(self) -> tuple[np.ndarray, ...]:
+        """The compiled search's k-d tree (built on first use)."""
+        from tether.world import clearance_kernels as ck
+
+        return ck.build_tree(self.points, ck.LEAF_SIZE)
+
+    @cached_property
+    def _kernel_field(self) -> tuple:
+        """The distance-field bound's arrays for the kernel (an empty field: no grid)."""
+        if self.grid is None:
+            z = np.zeros(0, dtype=np.int64)
+            return np.zeros(0), z, z, np.zeros(self.dim), 1.0, 0.0
+        flat, strides, shape = self._field
+        margin = (1.0 if self._centred else 2.0) * self._half_diag_m
+        origin = self.grid.origin_m.astype(float)
+        return (np.ascontiguousarray(flat), strides.astype(np.int64), shape.astype(np.int64),
+                origin, float(self.grid.resolution_m), margin)  # fmt: skip
+
+    def segment_clearance_kernel(
+        self, a: np.ndarray, b: np.ndarray, within_m: float, keys: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`segment_clearance` by the compiled kernel (needs numba).
+
+        With ``keys``, a hash table of bounds per key plays the part of the
+        reference's cache (:func:`~tether.world.clearance_kernels.segments_nearest_cached`),
+        and a searched segment starts from the closest point its key had last time.
+        """
+        from tether.world import clearance_kernels as ck
+
+        a = np.ascontiguousarray(a, dtype=float).reshape(-1, self.dim)
+        b = np.ascontiguousarray(b, dtype=float).reshape(-1, self.dim)
+        if self.tree is None or len(a) == 0:
+            return np.full(len(a), np.inf), np.zeros(len(a)), np.zeros((len(a), self.dim))
+        if keys is None:
+            dist, param, which = ck.segments_nearest(
+                *self._kernel_tree, a, b, float(within_m), *self._kernel_field, einsum_order(),
+            )  # fmt: skip
+        else:
+            keys = np.ascontiguousarray(keys, dtype=np.int64)
+            table = self._kernel_table(len(keys))
+            dist, param, which, added = ck.segments_nearest_cached(
+                *self._kernel_tree, a, b, float(within_m), keys,
+                self.cache_slack_m, *table, *self._kernel_field, einsum_order(),
+            )  # fmt: skip
+            self._ktable_used += int(added)
+        closest = np.zeros((len(a), self.dim))
+        hit = which >= 0
+        closest[hit] = self.points[which[hit]]
+        return dist, param, closest
+
+    _ktable: tuple[np.ndarray, ...] | None = None
+    _ktable_used: int = 0
+
+    def kernel_state(self, n_keys: int) -> tuple:
+        """What a compiled caller passes to the cached search: points, tree, table, used, field.
+
+        For kernels that run :func:`~tether.world.clearance_kernels.segments_nearest_cached`
+        themselves (it needs ``cache_slack_m`` and :func:`einsum_order` too); they
+        report the slots they add with :meth:`kernel_added`.
+        """
+        return (self.points, self._kernel_tree, self._kernel_table(n_keys), self._ktable_used,
+                self._kernel_field)  # fmt: skip
+
+    def kernel_added(self, added: int) -> None:
+        self._ktable_used += int(added)
+
+    def kernel_grow(self, n_keys: int) -> None:
+        """Start an empty table big enough for ``n_keys`` (a kernel found it too full)."""
+        self._ktable = None
+        self._ktable_used = 0
+        self._kernel_table(n_keys)
+
+    def _kernel_table(self, n_keys: int) -> tuple[np.ndarray, ...]:
+        """The kernel's cache table, emptied and enlarged when it would be over half full."""
+        cap = 0 if self._ktable is None else len(self._ktable[0])
+        if self._ktable_used + n_keys > cap // 2:
+            cap = 64
+            while cap < 4 * n_keys:
+                cap *= 2
+            self._ktable = (np.full(cap, -1, dtype=np.int64), np.zeros(cap),
+                            np.zeros((cap, self.dim)), np.zeros((cap, self.dim)),
+                            np.full(cap, -1, dtype=np.int64))  # fmt: skip
+            self._ktable_used = 0
+        return self._ktable
+
+    def _segment_clearance_reference(
+        self,
+        a: np.ndarray,
+        b: np.ndarray,
+        within_m: float,
+        keys: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The reference search of :meth:`segment_clearance` (k-d tree balls, numpy)."""
         a = np.asarray(a, dtype=float).reshape(-1, self.dim)
         b = np.asarray(b, dtype=float).reshape(-1, self.dim)
         k = len(a)

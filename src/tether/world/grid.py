@@ -125,12 +125,27 @@ class OccupancyGrid:
         """
         a = np.atleast_2d(np.asarray(a, dtype=float))
         b = np.atleast_2d(np.asarray(b, dtype=float))
-        if clearance_m > 0:
-            mask = self.distance_field_m >= max(clearance_m, 0.5 * self.resolution_m)
-        else:
-            mask = ~self.occupied
+        mask = self.free_mask(clearance_m)
         to_cells = 1.0 / self.resolution_m
         return segment_free(mask, (a - self.origin_m) * to_cells, (b - self.origin_m) * to_cells)
+
+    def free_mask(self, clearance_m: float = 0.0) -> np.ndarray:
+        """The mask :meth:`segments_clear` samples: free cells, or cells ``clearance_m`` clear.
+
+        Made once per clearance and kept (a 3-D town grid has millions of cells: making
+        it cost more than the line-of-sight test of a whole team). Like the distance
+        field, it assumes ``occupied`` is not modified in place.
+        """
+        key = float(clearance_m) if clearance_m > 0 else 0.0
+        masks = self.__dict__.setdefault("_free_masks", {})
+        if key not in masks:
+            if len(masks) >= 8:  # a few clearances in practice; never an unbounded cache
+                masks.clear()
+            if key > 0:
+                masks[key] = self.distance_field_m >= max(key, 0.5 * self.resolution_m)
+            else:
+                masks[key] = ~self.occupied
+        return masks[key]
 
     def surface_points(
         self, spacing_m: float | None = None, *, outside_is_free: bool = False

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from tether import jit
+
 __all__ = ["segment_free"]
 
 
@@ -31,6 +33,12 @@ def segment_free(
     out = np.zeros(len(a), dtype=bool)
     if len(a) == 0:
         return out
+    if jit.warm() and free.flags.c_contiguous:  # the same samples, compiled
+        from tether.world.los_kernels import segment_free_kernel
+
+        shape = np.asarray(free.shape, dtype=np.int64)
+        return segment_free_kernel(free.reshape(-1), shape, np.ascontiguousarray(a),
+                                   np.ascontiguousarray(b), float(step_cells))  # fmt: skip
     # canonical direction: the lexicographically smaller end first
     diff = b - a
     nonzero = diff != 0

@@ -1,0 +1,479 @@
+"""Compiled kernels of App. A: pairs, weights, edge energies, gradient (numba, lazy).
+
+(Closest points on paths: :mod:`tether.continuous.tracking_kernels`.)
+
+The fast paths of :func:`tether.continuous.weights.compute_weights`,
+:func:`tether.continuous.gradient.edge_energy`,
+:func:`tether.continuous.gradient.lambda2_gradient` and
+:func:`tether.continuous.gradient.connectivity_force`, used when
+:func:`tether.jit.enabled`. Each loop does the arithmetic of its numpy reference in the
+same order (``np.add.at`` and ``np.bincount`` accumulate in index order; the norm of a
+row is ``sqrt((x0^2 + x1^2) + x2^2)``; ``scipy.special.expit(x)`` is
+``1 / (1 + exp(-x))``), so both give the same bits; the tests compare them. For a team
+of 35 robots the numpy versions are almost all interpreter and dispatch overhead.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from numba import njit
+
+from tether import jit
+from tether.graph.kernels import laplacian_dense_kernel
+from tether.world.clearance_kernels import segments_nearest_cached
+
+#: below this many robots the pairs are found by testing all of them
+BRUTE_MAX_N = 128
+
+
+@njit(cache=True, inline="always")
+def _norm(x):  # noqa: ANN001, ANN202
+    """``numpy.linalg.norm`` of a short row: ``sqrt`` of the squares summed in order."""
+    acc = 0.0
+    for d in range(x.shape[0]):
+        acc += x[d] * x[d]
+    return math.sqrt(acc)
+
+
+@njit(cache=True, inline="always")
+def smooth_step1(x, lo, hi):  # noqa: ANN001, ANN202
+    """``(S(x; lo, hi), dS/dx)`` of :func:`tether.continuous.potential.smooth_step`."""
+    width = hi - lo
+    t = (x - lo) / width
+    if t > 0.0 and t < 1.0:
+        g = 1.0 / t - 1.0 / (1.0 - t)
+        s_in = 1.0 / (1.0 + math.exp(g))  # expit(-g)
+        e_g = 1.0 / (1.0 + math.exp(-g))  # expit(g)
+        ds = s_in * e_g * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
+        return s_in, ds
+    return (1.0 if t >= 1.0 else 0.0), 0.0
+
+
+@njit(cache=True, inline="always")
+def log_derivative1(x, lo, hi):  # noqa: ANN001, ANN202
+    """``S'(x) / S(x)`` of :func:`tether.continuous.potential.smooth_step_log_derivative`."""
+    width = hi - lo
+    t = (x - lo) / width
+    if t > 0.0 and t < 1.0:
+        g = 1.0 / t - 1.0 / (1.0 - t)
+        return 1.0 / (1.0 + math.exp(-g)) * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
+    return 0.0
+
+
+@njit(cache=True)
+def pairs_in_range(q, r):  # noqa: ANN001, ANN201
+    """All pairs ``(i, j)``, ``i < j``, with ``||q_i - q_j|| < r``, in lexicographic order.
+
+    All pairs are tested below ``BRUTE_MAX_N`` robots; above, robots are bucketed in
+    cubes of side ``r`` (sorted cube codes, binary search for the neighbouring cubes)
+    and each robot's partners sorted, ``O(n log n + m)``.
+    """
+    n, dim = q.shape
+    cap = 16 * n + 16
+    out = np.empty((cap, 2), np.int64)
+    m = 0
+    diff = np.empty(dim)
+    if n <= BRUTE_MAX_N:
+        for i in range(n):
+            for j in range(i + 1, n):
+                for d in range(dim):
+                    diff[d] = q[i, d] - q[j, d]
+                if _norm(diff) < r:
+                    if m == len(out):
+                        out = _grow(out)
+                    out[m, 0], out[m, 1] = i, j
+                    m += 1
+        return out[:m].copy()
+    lo = np.empty(dim)
+    for d in range(dim):
+        lo[d] = q[:, d].min()
+    cell = np.empty((n, dim), np.int64)
+    size = np.ones(dim, np.int64)
+    for k in range(n):
+        for d in range(dim):
+            cell[k, d] = int((q[k, d] - lo[d]) / r)
+            size[d] = max(size[d], cell[k, d] + 3)
+    code = np.zeros(n, np.int64)
+    for k in range(n):
+        c = 0
+        for d in range(dim):
+            c = c * size[d] + cell[k, d] + 1
+        code[k] = c
+    order = np.argsort(code, kind="mergesort")
+    sorted_code = code[order]
+    partners = np.empty(n, np.int64)
+    offs = np.empty(dim, np.int64)
+    for i in range(n):
+        cnt = 0
+        for nb in range(3**dim):
+            rest = nb
+            c = 0
+            for d in range(dim):
+                offs[d] = rest % 3 - 1
+                rest //= 3
+            for d in range(dim):
+                c = c * size[d] + cell[i, d] + 1 + offs[d]
+            first = np.searchsorted(sorted_code, c)
+            while first < n and sorted_code[first] == c:
+                j = order[first]
+                first += 1
+                if j <= i:
+                    continue
+                for d in range(dim):
+                    diff[d] = q[i, d] - q[j, d]
+                if _norm(diff) < r:
+                    partners[cnt] = j
+                    cnt += 1
+        partners[:cnt].sort()
+        while m + cnt > len(out):
+            out = _grow(out)
+        for k in range(cnt):
+            out[m, 0], out[m, 1] = i, partners[k]
+            m += 1
+    return out[:m].copy()
+
+
+@njit(cache=True)
+def _grow(out):  # noqa: ANN001, ANN202
+    bigger = np.empty((2 * len(out), 2), np.int64)
+    bigger[: len(out)] = out
+    return bigger
+
+
+@njit(cache=True)
+def pairs_below(q, pairs, r):  # noqa: ANN001, ANN201
+    """The given pairs with ``||q_i - q_j|| < r`` (order kept)."""
+    dim = q.shape[1]
+    keep = np.zeros(len(pairs), np.bool_)
+    diff = np.empty(dim)
+    for k in range(len(pairs)):
+        for d in range(dim):
+            diff[d] = q[pairs[k, 0], d] - q[pairs[k, 1], d]
+        keep[k] = _norm(diff) < r
+    return pairs[keep].copy()
+
+
+@njit(cache=True)
+def weights_kernel(  # noqa: ANN201, PLR0913
+    q, pairs, has_obstacles, clearance, s_star, o_star, rs_inner, rs, ro, ro_outer, rc, rc_outer
+):  # noqa: ANN001
+    """Every array of :class:`tether.continuous.weights.WeightedGraph` for ``pairs``.
+
+    ``pairs`` are within ``Rs``; ``clearance``, ``s_star``, ``o_star`` are the
+    obstacle search's results for them (ignored unless ``has_obstacles``). Returns
+    ``pair_factor, dP_di, dP_dj, clearance, collision, coll_pairs, coll_unit,
+    coll_logd``, each computed as :func:`~tether.continuous.weights.compute_weights`
+    does.
+    """
+    n, dim = q.shape
+    m = len(pairs)
+    d_ = np.empty(m)
+    u = np.empty((m, dim))
+    diff = np.empty(dim)
+    a_fac = np.empty(m)
+    da = np.empty(m)
+    for k in range(m):
+        i, j = pairs[k, 0], pairs[k, 1]
+        for c in range(dim):
+            diff[c] = q[i, c] - q[j, c]
+        dk = _norm(diff)
+        d_[k] = dk
+        den = max(dk, 1e-300)
+        for c in range(dim):
+            u[k, c] = diff[c] / den
+        a_fac[k], da_k = smooth_step1(rs_inner + rs - dk, rs_inner, rs)
+        da[k] = -da_k
+    dP_di = np.empty((m, dim))
+    dP_dj = np.empty((m, dim))
+    b_fac = np.ones(m)
+    clear = np.full(m, np.inf)
+    if has_obstacles:
+        clear = clearance.copy()
+        for k in range(m):
+            i, j = pairs[k, 0], pairs[k, 1]
+            near = np.isfinite(clearance[k])
+            b_fac[k], db = smooth_step1(clearance[k] if near else ro_outer, ro, ro_outer)
+            s = s_star[k]
+            inv = max(clearance[k], 1e-300)
+            for c in range(dim):
+                p_star = q[i, c] + s * (q[j, c] - q[i, c])
+                grad_d = (p_star - o_star[k, c]) / inv if near else 0.0
+                dB_di = (db * (1.0 - s)) * grad_d
+                dB_dj = (db * s) * grad_d
+                dP_di[k, c] = (da[k] * u[k, c]) * b_fac[k] + a_fac[k] * dB_di
+                dP_dj[k, c] = (-da[k] * u[k, c]) * b_fac[k] + a_fac[k] * dB_dj
+    else:
+        for k in range(m):
+            for c in range(dim):
+                dP_di[k, c] = da[k] * u[k, c]
+                dP_dj[k, c] = -dP_di[k, c]
+    pair_factor = np.empty(m)
+    for k in range(m):
+        pair_factor[k] = a_fac[k] * b_fac[k]
+    close = d_ < rc_outer
+    mc = int(close.sum())
+    coll_pairs = np.empty((mc, 2), pairs.dtype)
+    coll_unit = np.empty((mc, dim))
+    coll_logd = np.empty(mc)
+    gamma = np.empty(mc)
+    kc = 0
+    for k in range(m):
+        if close[k]:
+            coll_pairs[kc, 0], coll_pairs[kc, 1] = pairs[k, 0], pairs[k, 1]
+            coll_unit[kc] = u[k]
+            gamma[kc] = smooth_step1(d_[k], rc, rc_outer)[0]
+            coll_logd[kc] = log_derivative1(d_[k], rc, rc_outer)
+            kc += 1
+    # collision_factor: np.add.at over the first column, then over the second
+    logc = np.zeros(n)
+    zero = np.zeros(n, np.bool_)
+    for col in range(2):
+        for k in range(mc):
+            if gamma[k] > 0:
+                logc[coll_pairs[k, col]] += math.log(gamma[k])
+    for k in range(mc):
+        if not gamma[k] > 0:
+            zero[coll_pairs[k, 0]] = True
+            zero[coll_pairs[k, 1]] = True
+    collision = np.empty(n)
+    for r in range(n):
+        collision[r] = 0.0 if zero[r] else math.exp(logc[r])
+    return pair_factor, dP_di, dP_dj, clear, collision, coll_pairs, coll_unit, coll_logd
+
+
+def no_obstacles(dim: int) -> tuple:
+    """:func:`evaluate_kernel`'s obstacle arguments for a world without obstacle points.
+
+    Arrays of the types an obstacle index passes, so that both share one compilation.
+    """
+    i, f1, f2 = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, dim))
+    tree = (f2, i, f2, f2, i, i, i, f2, f1)
+    table = (np.full(2, -1, np.int64), f1, f2, f2, i)
+    return f2, tree, table, 0, (f1, i, i, np.zeros(dim), 1.0, 0.0)
+
+
+@njit(cache=True)
+def evaluate_kernel(  # noqa: ANN201, PLR0913
+    q, rs_inner, rs, ro, ro_outer, rc, rc_outer, want_laplacian, obstacles, points, tree,
+    table, used, slack, field, order,
+):  # noqa: ANN001  # fmt: skip
+    """:func:`~tether.continuous.weights.compute_weights` in one call, plus ``W`` and ``L``.
+
+    Pairs (:func:`pairs_in_range`), their clearance (``obstacles``: the cached search
+    :func:`~tether.world.clearance_kernels.segments_nearest_cached` on ``points``,
+    ``tree``, ``table`` with ``used`` slots filled, keys ``i n + j``), the weights
+    (:func:`weights_kernel`), ``W_ij`` and, with ``want_laplacian``, the dense
+    Laplacian (:func:`tether.graph.kernels.laplacian_dense_kernel`). Returns those and
+    the number of table slots added, or -1 (and nothing computed) when the table
+    would be more than half full: the caller enlarges it and calls again.
+    """
+    n, dim = q.shape
+    pairs = pairs_in_range(q, rs)
+    m = len(pairs)
+    clear = np.zeros(0)
+    s_star = np.zeros(0)
+    o_star = np.zeros((0, dim))
+    added = 0
+    has_obstacles = obstacles and m > 0
+    if has_obstacles:
+        if used + m > len(table[0]) // 2:
+            added = -1
+        else:
+            a = np.empty((m, dim))
+            b = np.empty((m, dim))
+            keys = np.empty(m, np.int64)
+            for k in range(m):
+                a[k] = q[pairs[k, 0]]
+                b[k] = q[pairs[k, 1]]
+                keys[k] = pairs[k, 0] * n + pairs[k, 1]
+            spts, perm, lo, hi, child, start, end, cen, rad = tree
+            t_keys, t_bound, t_a, t_b, t_seed = table
+            f_flat, f_strides, f_shape, f_origin, f_res, f_margin = field
+            clear, s_star, which, added = segments_nearest_cached(
+                spts, perm, lo, hi, child, start, end, cen, rad, a, b, ro_outer, keys, slack,
+                t_keys, t_bound, t_a, t_b, t_seed,
+                f_flat, f_strides, f_shape, f_origin, f_res, f_margin, order,
+            )  # fmt: skip
+            o_star = np.zeros((m, dim))
+            for k in range(m):
+                if which[k] >= 0:
+                    o_star[k] = points[which[k]]
+    if added < 0:
+        z = np.zeros((0, dim))
+        return (np.zeros(0), z, z, np.zeros(0), np.zeros(0), pairs[:0].copy(), z, np.zeros(0),
+                pairs, np.zeros(0), np.zeros((0, 0)), added)  # fmt: skip
+    pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd = weights_kernel(
+        q, pairs, has_obstacles, clear, s_star, o_star, rs_inner, rs, ro, ro_outer, rc, rc_outer
+    )
+    w = np.empty(m)
+    for k in range(m):
+        w[k] = pf[k] * coll[pairs[k, 0]] * coll[pairs[k, 1]]
+    lap = laplacian_dense_kernel(n, pairs, w) if want_laplacian else np.zeros((0, 0))
+    return pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added
+
+
+@njit(cache=True)
+def edge_energy_kernel(n, pairs, pair_factor, collision, nu):  # noqa: ANN001, ANN201
+    """``T_i = sum_j W_ij (nu_i - nu_j)^2`` as :func:`~tether.continuous.gradient.edge_energy`."""
+    first = np.zeros(n)
+    second = np.zeros(n)
+    for k in range(len(pairs)):
+        i, j = pairs[k, 0], pairs[k, 1]
+        dn = nu[i] - nu[j]
+        e = pair_factor[k] * collision[i] * collision[j] * (dn * dn)
+        first[i] += e
+    for k in range(len(pairs)):
+        i, j = pairs[k, 0], pairs[k, 1]
+        dn = nu[i] - nu[j]
+        e = pair_factor[k] * collision[i] * collision[j] * (dn * dn)
+        second[j] += e
+    return first + second
+
+
+@njit(cache=True)
+def gradient_kernel(  # noqa: ANN201, PLR0913
+    n, pairs, dP_di, dP_dj, coll_pairs, coll_unit, coll_logd, nu, collision, energy
+):  # noqa: ANN001
+    """``dlambda2/dq`` as :func:`~tether.continuous.gradient.lambda2_gradient`, ``(n, dim)``."""
+    dim = dP_di.shape[1]
+    grad = np.zeros((n, dim))
+    m = len(pairs)
+    cc = np.empty(m)
+    for k in range(m):
+        i, j = pairs[k, 0], pairs[k, 1]
+        dn = nu[i] - nu[j]
+        cc[k] = collision[i] * collision[j] * (dn * dn)
+    for k in range(m):
+        for c in range(dim):
+            grad[pairs[k, 0], c] += dP_di[k, c] * cc[k]
+    for k in range(m):
+        for c in range(dim):
+            grad[pairs[k, 1], c] += dP_dj[k, c] * cc[k]
+    mc = len(coll_pairs)
+    for k in range(mc):
+        coef = coll_logd[k] * (energy[coll_pairs[k, 0]] + energy[coll_pairs[k, 1]])
+        for c in range(dim):
+            grad[coll_pairs[k, 0], c] += coef * coll_unit[k, c]
+    for k in range(mc):
+        coef = coll_logd[k] * (energy[coll_pairs[k, 0]] + energy[coll_pairs[k, 1]])
+        for c in range(dim):
+            grad[coll_pairs[k, 1], c] += -(coef * coll_unit[k, c])
+    return grad
+
+
+@njit(cache=True)
+def force_kernel(grad, lam, lo, hi, gain):  # noqa: ANN001, ANN201
+    """``-dV/dlambda2 * grad`` per robot (:func:`~tether.continuous.gradient.connectivity_force`).
+
+    ``lam`` is each robot's lambda2 ``(n,)``; the slope is
+    :func:`~tether.continuous.potential.potential_slope`.
+    """
+    n, dim = grad.shape
+    out = np.empty((n, dim))
+    for r in range(n):
+        a = max(hi - lam[r], 0.0)
+        b = max(lam[r] - lo, 1e-12)
+        slope = -gain * a * (a + 2.0 * b) / (b * b)
+        for c in range(dim):
+            out[r, c] = -slope * grad[r, c]
+    return out
+
+
+def warm_up() -> float:
+    """Compile or load (from numba's cache) every kernel of the continuous strategies.
+
+    Each kernel is called once on a tiny input of the types the strategies pass, so
+    that a benchmark (or a worker of a campaign) can pay numba's start-up up front and
+    measure it on its own; then the marker of :func:`tether.jit.marker` is written (the
+    ``auto`` switch waits for it). Returns the seconds it took.
+    """
+    start = time.perf_counter()
+    from tether.graph.kernels import laplacian_dense_kernel
+    from tether.world.clearance import ObstacleIndex
+    from tether.world.los_kernels import segment_free_kernel
+
+    q = np.array([[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [1.0, 1.5, 1.0]])
+    pairs = pairs_in_range(q, 6.0)
+    pairs_below(q, pairs, 6.0)
+    index = ObstacleIndex(np.array([[1.0, 0.5, 1.0], [5.0, 5.0, 5.0]]), 3)
+    i, j = pairs[:, 0], pairs[:, 1]
+    clear, s, o = index.segment_clearance_kernel(q[i], q[j], 1.75, i * 3 + j)
+    index.segment_clearance_kernel(q[i], q[j], 1.75)
+    out = weights_kernel(q, pairs, True, clear, s, o, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
+    pf, dP_di, dP_dj, _, coll, cp, cu, cl = out
+    nu = np.array([-0.5, 0.0, 0.5])
+    energy = edge_energy_kernel(3, pairs, pf, coll, nu)
+    grad = gradient_kernel(3, pairs, dP_di, dP_dj, cp, cu, cl, nu, coll, energy)
+    force_kernel(grad, np.full(3, 0.1), 0.0, 0.5, 1.0)
+    laplacian_dense_kernel(3, pairs, pf)
+    first = np.array([0, 1], dtype=np.int64)
+    seg = np.ones((1, 3))
+    one = np.ones(1)
+    from tether.continuous.tracking_kernels import path_states_kernel
+
+    path_states_kernel(q[:1].copy(), first, seg, seg, one, one, one, seg, seg, seg, seg, one,
+                       one, 1e-6, 1, one.copy(), one.copy() + 1, np.full(1, -1))  # fmt: skip
+    for mask in (np.ones((4, 4), dtype=bool), np.ones((4, 4, 4), dtype=bool)):
+        shape = np.asarray(mask.shape, dtype=np.int64)
+        a = np.full((1, mask.ndim), 0.5)
+        segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5)
+    for obs in (None, index):
+        points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
+            obs.kernel_state(3)  # fmt: skip
+        evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
+                        table, used, 0.25, fld, 1)  # fmt: skip
+    seconds = time.perf_counter() - start
+    jit.write_marker(seconds)
+    return seconds
+
+
+if __name__ == "__main__":  # the background warm-up of tether.jit's ``auto`` switch
+    import contextlib
+    import os
+
+    with contextlib.suppress(AttributeError, OSError):
+        os.nice(10)
+    warm_up()
+
+
+@njit(cache=True)
+def euler_kernel(q, v, force, h, mass, damping, box, margin):  # noqa: ANN001, ANN201
+    """:func:`~tether.continuous.dynamics.semi_implicit_euler`, then
+    :func:`~tether.continuous.dynamics.stay_inside` if ``box`` has two rows."""
+    n, dim = q.shape
+    q_new = np.empty((n, dim))
+    v_new = np.empty((n, dim))
+    for r in range(n):
+        for c in range(dim):
+            vn = (mass * v[r, c] + h * force[r, c]) / (mass + h * damping)
+            qn = q[r, c] + h * vn
+            if len(box) == 2:
+                lo = min(box[0, c] + margin, q[r, c])
+                hi = max(box[1, c] - margin, q[r, c])
+                clipped = min(max(qn, lo), hi)
+                if clipped != qn:
+                    vn = 0.0
+                qn = clipped
+            q_new[r, c] = qn
+            v_new[r, c] = vn
+    return q_new, v_new
+
+
+@njit(cache=True)
+def displacement_kernel(v, force, mass, delta):  # noqa: ANN001, ANN201
+    """:func:`~tether.continuous.dynamics.displacement_step` (``inf`` if nothing moves)."""
+    n, dim = v.shape
+    vmax, fmax = 0.0, 0.0
+    for r in range(n):
+        sv, sf = 0.0, 0.0
+        for c in range(dim):
+            sv += v[r, c] * v[r, c]
+            sf += force[r, c] * force[r, c]
+        vmax = max(vmax, math.sqrt(sv))
+        fmax = max(fmax, math.sqrt(sf))
+    disc = vmax * vmax + 4.0 * delta * fmax / mass
+    denom = vmax + math.sqrt(disc)
+    return np.inf if denom <= 0 else 2.0 * delta / denom
