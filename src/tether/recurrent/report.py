@@ -34,6 +34,7 @@ import numpy as np
 
 from tether.experiments.executors import Trial
 from tether.experiments.sweep import run_trials
+from tether.recurrent.report_tables import run_statistics
 from tether.runfolder import machine
 
 __all__ = ["make_report", "trial_scenario"]
@@ -55,16 +56,32 @@ def _run_dir(out: Path, m: str, label: str, settings: dict[str, dict[str, Any]],
     return out / "runs" / m / canonical / f"seed-{k}"
 
 
+#: the defaults of the registered strategies, spelled out so a run folder's setting is explicit
+DEFAULT_BINDING = "assigned"
+DEFAULT_COORDINATION = "greedy"
+
+
 def _settings(thetas: tuple[int, ...]) -> dict[str, dict[str, Any]]:
+    """Every setting by label; identical dicts share run folders (the last label names them)."""
+
+    def rec(theta: int, method: str, timed: bool, binding: str = DEFAULT_BINDING) -> dict:
+        return {"kind": "recurrent", "theta": theta, "method": method, "timed": timed,
+                "binding": binding}  # fmt: skip
+
     out: dict[str, dict[str, Any]] = {
-        "apx_t12_timed": {"kind": "recurrent", "theta": 12, "method": "apx", "timed": True},
-        "ilp_t12_timed": {"kind": "recurrent", "theta": 12, "method": "ilp", "timed": True},
-        "apx_t12_instant": {"kind": "recurrent", "theta": 12, "method": "apx", "timed": False},
-        "ilp_t12_instant": {"kind": "recurrent", "theta": 12, "method": "ilp", "timed": False},
+        "apx_t12_timed": rec(12, "apx", True),
+        "ilp_t12_timed": rec(12, "ilp", True),
+        "apx_t12_instant": rec(12, "apx", False),
+        "ilp_t12_instant": rec(12, "ilp", False),
     }
     for th in thetas:
-        out[f"theta{th}"] = {"kind": "recurrent", "theta": th, "method": "apx", "timed": False}
-    out["utility"] = {"kind": "utility"}
+        out[f"theta{th}"] = rec(th, "apx", False)
+    # relay binding both ways at theta = 1 (the measurement behind the default)
+    for binding in ("assigned", "frontiers"):
+        out[f"theta1_{binding}"] = rec(1, "apx", False, binding)
+    out["utility"] = {"kind": "utility", "coordination": DEFAULT_COORDINATION}
+    for coordination in ("greedy", "none"):
+        out[f"utility_{coordination}"] = {"kind": "utility", "coordination": coordination}
     return out
 
 
@@ -73,12 +90,17 @@ def trial_scenario(
 ) -> dict[str, Any]:
     """The scenario of one setting on one map (the paper's Sec. VII-A at 0.1 m per cell)."""
     if setting["kind"] == "utility":
-        strategy: dict[str, Any] = {"name": "utility", "params": {"ratio": 0.5}}
+        strategy: dict[str, Any] = {
+            "name": "utility",
+            "params": {"ratio": 0.5, "coordination": setting["coordination"]},
+        }
     else:
+        # Fig. 4's ILP runs had a 60 s limit per plan (none was reached)
         strategy = {
             "name": "recurrent",
             "params": {"theta": setting["theta"], "method": setting["method"], "delta": 4,
-                       "count_planning_time": setting["timed"], "check": check},
+                       "count_planning_time": setting["timed"], "check": check,
+                       "relay_binding": setting["binding"], "time_limit_s": 60.0},
         }  # fmt: skip
     return {
         "name": f"recurrent-report-{map_path.stem}",
@@ -196,6 +218,7 @@ def make_report(
                 "plans_mean": float(np.mean([s.get("plans", 0) for s in ss])),
                 "constraint_violations": int(sum(s.get("constraint_violations", 0) for s in ss)),
                 "wall_time_mean_s": float(np.mean([s["wall_time_s"] for s in ss])),
+                **run_statistics(ss),
             }
         report["maps"][m] = {**old.get("maps", {}).get(m, {}), **entry}
     for m, entry in old.get("maps", {}).items():
@@ -203,6 +226,12 @@ def make_report(
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     _figures(out, maps, chosen, runs, thetas, all_settings)
     return report
+
+
+def _name(label: str) -> str:
+    if label.startswith("utility"):
+        return "Utility" + (f" ({label[8:]})" if label != "utility" else "")
+    return f"θ = {label[5:]}"
 
 
 def _figures(
@@ -249,14 +278,13 @@ def _figures(
         plt.close(fig)
 
     curves = [f"theta{th}" for th in thetas if f"theta{th}" in chosen]
-    if "utility" in chosen:
-        curves.append("utility")
+    both = [u for u in ("utility_greedy", "utility_none") if u in chosen]
+    curves += both or (["utility"] if "utility" in chosen else [])
     if curves:
         fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.8), squeeze=False)
         for ax, m in zip(axes[0], maps, strict=True):
             for label in curves:
-                name = "Utility" if label == "utility" else f"θ = {label[5:]}"
-                band(ax, m, label, name)
+                band(ax, m, label, _name(label))
             ax.set_title(MAP_LABELS.get(m, m))
             ax.set_xlabel("step")
             ax.set_ylabel("explored area [%]")
@@ -270,7 +298,7 @@ def _figures(
         fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.5), squeeze=False)
         for ax, m in zip(axes[0], maps, strict=True):
             e = rep["maps"][m]
-            names = ["Utility" if c == "utility" else f"θ={c[5:]}" for c in curves]
+            names = [_name(c).replace(" = ", "=").replace("Utility ", "Utility\n") for c in curves]
             mu = [e[c]["out_of_comm_mean_steps"] for c in curves]
             sd = [e[c]["out_of_comm_std_steps"] for c in curves]
             ax.bar(names, mu, yerr=sd, capsize=3)

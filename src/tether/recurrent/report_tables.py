@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-__all__ = ["markdown"]
+__all__ = ["ci95", "markdown", "run_statistics"]
 
 MAPS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
 FIG4 = {
@@ -46,6 +46,47 @@ def _at(curves: list[np.ndarray], step: int) -> float:
 def _pm(values: list[float], fmt: str = "{:.1f}") -> str:
     sd = float(np.std(values, ddof=1)) if len(values) > 1 else 0.0
     return f"{fmt.format(np.mean(values))} ± {fmt.format(sd)}"
+
+
+def ci95(values: list[float | None]) -> tuple[float | None, float | None]:
+    """Mean and half-width of its 95 % confidence interval (Student t), ``None`` if undefined.
+
+    ``None`` values (e.g. a share of the map never reached) are left out.
+    """
+    from scipy.stats import t
+
+    v = np.asarray([x for x in values if x is not None], dtype=float)
+    if len(v) == 0:
+        return None, None
+    if len(v) < 2:
+        return float(v.mean()), None
+    half = t.ppf(0.975, len(v) - 1) * v.std(ddof=1) / np.sqrt(len(v))
+    return float(v.mean()), float(half)
+
+
+def _mean(values: list) -> float | None:
+    v = [x for x in values if x is not None]
+    return float(np.mean(v)) if v else None
+
+
+#: summary keys of issue 13 that every setting's runs are summarized by
+TIME_TO = ("time_to_50pct_s", "time_to_75pct_s", "time_to_90pct_s")
+SHARES = ("time_moving_frac", "time_relaying_frac", "time_waiting_frac", "time_returning_frac")
+
+
+def run_statistics(summaries: list[dict]) -> dict:
+    """Per-setting statistics of the new summary keys: 95 % CIs, time shares, episodes."""
+    out: dict = {}
+    for key in ("final_explored_fraction", "out_of_comm_mean_steps"):
+        mu, half = ci95([s.get(key) for s in summaries])
+        out[f"{key}_ci95"] = [mu, half]
+    for key in TIME_TO:
+        out[key] = [s.get(key) for s in summaries]
+    for key in SHARES:
+        out[f"{key}_mean"] = _mean([s.get(key) for s in summaries])
+    for key in ("out_of_comm_episodes", "out_of_comm_longest_steps"):
+        out[f"{key}_mean"] = _mean([s.get(key) for s in summaries])
+    return out
 
 
 def _plan_times(runs: list[Path]) -> np.ndarray:
