@@ -45,7 +45,12 @@ from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
 from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
 from tether.recurrent.planning.deployment import optimal_deployment
 from tether.recurrent.planning.expgraph import FRONTIER, ExplorationGraph, GraphBuilder
-from tether.recurrent.planning.readiness import ReadinessTracker, relay_paths
+from tether.recurrent.planning.readiness import (
+    BINDINGS,
+    ReadinessTracker,
+    binding_targets,
+    relay_paths,
+)
 
 __all__ = ["RecurrentStrategy", "frontier_utilities"]
 
@@ -125,10 +130,8 @@ class RecurrentStrategy:
         self.blocked = np.zeros(sim.n, dtype=bool)
         self.failed_seen = np.zeros(sim.n, dtype=bool)
         self.recoveries: list[dict[str, Any]] = []
-        if self.relay_binding not in ("assigned", "frontiers"):
-            raise ValueError(
-                f"relay_binding must be 'assigned' or 'frontiers' (got {self.relay_binding!r})"
-            )
+        if self.relay_binding not in BINDINGS:
+            raise ValueError(f"relay_binding must be one of {BINDINGS}")
 
     def metrics(self) -> dict[str, Any]:
         issued = [p for p in self.plans if p["issued"]]
@@ -162,9 +165,13 @@ class RecurrentStrategy:
 
     def goal_keys(self, sim: ExplorationSim) -> np.ndarray:
         """Coarse node of every robot's goal (location keys for readiness)."""
+        return self._key(sim, sim.goal)
+
+    @staticmethod
+    def _key(sim: ExplorationSim, points: np.ndarray) -> np.ndarray:
         f = sim.cfg.coarse_factor
-        c = np.floor(sim.goal / f).astype(np.intp)
-        return c[:, 0] * (sim.shape[1] // f + 1) + c[:, 1]
+        c = np.floor(np.asarray(points, dtype=float) / f).astype(np.intp)
+        return c[..., 0] * (sim.shape[1] // f + 1) + c[..., 1]
 
     def update(self, sim: ExplorationSim) -> None:
         for r in np.flatnonzero(self.blocked):
@@ -205,6 +212,7 @@ class RecurrentStrategy:
     def recover(self, sim: ExplorationSim, robot: int) -> None:
         """``robot`` failed: preempt its branches (Sec. VII-B); cut-off robots head home."""
         keys = self.goal_keys(sim)
+        keys[robot] = self._key(sim, sim.goal_at_failure[robot])  # where it was bound
         branch = sorted(r for r in self.tracker.branch(robot, keys) if r != robot)
         self.tracker.drop({int(keys[r]) for r in [robot, *branch]})
         homing = []
@@ -381,7 +389,7 @@ class RecurrentStrategy:
         fake: set[int],
         coarse: Any,
     ) -> None:
-        """Relay paths ``P_f`` of the plan's (real and fake) frontiers (Sec. VI)."""
+        """Relay paths ``P_f`` of the plan (Sec. VI; whose: ``relay_binding``)."""
         goals: dict[int, int] = {}
         times: dict[int, float] = {}
         for r in np.flatnonzero(sim.alive).tolist():
@@ -395,10 +403,9 @@ class RecurrentStrategy:
             # docs/recurrent.md)
             wait = sim.hold_steps(r)
             times[r] = wait + sim.remaining_distance(r) / sim.cfg.speed_cells + scan
-        targets = [r for r in assignment if r in goals]
-        if self.relay_binding == "frontiers":  # Sec. VI: P_f of (fake) frontiers only
-            frontier_like = {v for v in assignment.values() if graph.kind[v] == FRONTIER} | fake
-            targets = [r for r in targets if assignment[r] in frontier_like]
+        frontier_like = {v for v in assignment.values() if graph.kind[v] == FRONTIER} | fake
+        targets = binding_targets(assignment, frontier_like, self.relay_binding)
+        targets = [r for r in targets if r in goals]
         paths = relay_paths(goals, times, targets, graph.edges, base=0)
         keys = self.goal_keys(sim)
         for f, members in paths.items():

@@ -186,6 +186,7 @@ class ExplorationSim:
         self.scan_left = np.zeros(n, dtype=int)
         self.alive = np.ones(n, dtype=bool)
         self.failed_at = np.full(n, -1, dtype=int)  # step of the failure, -1 if alive
+        self.goal_at_failure = np.full((n, 2), np.nan)  # the goal it was heading to
         self.moved = np.zeros(n, dtype=bool)  # advanced along its path in the last step
         self.knowledge = Knowledge(self.shape, n)
         self.connected = np.ones(n, dtype=bool)
@@ -242,9 +243,10 @@ class ExplorationSim:
         """Fail-stop ``robot`` now: it stops, senses nothing and drops its links for good."""
         if not self.alive[robot]:
             return
-        self.stop(robot)
         self.alive[robot] = False
         self.failed_at[robot] = self.t
+        self.goal_at_failure[robot] = self.goal[robot]
+        self.stop(robot)
         self.connected[robot] = False
         self.log("failure", robot=int(robot))
 

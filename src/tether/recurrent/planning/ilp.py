@@ -87,15 +87,27 @@ def solve_ilp(
 
     ``time_limit_s`` bounds the whole call (reductions, incumbent and solver):
     when it runs out, the best solution found is returned with
-    ``proven_optimal=False`` (at worst the APX incumbent).
+    ``proven_optimal=False`` (at worst the APX incumbent). The phases before the
+    solver are not interrupted; the budget is checked between them, and a call
+    out of time before the solver returns no solution (``{0}``, the caller's
+    APX fallback takes over).
     """
     t0 = time.perf_counter()
     if problem.budget == 0 or not np.any(problem.utility > 0):
         return IlpResult({0}, 0.0, True, 0.0, {})
     if time_limit_s is not None and time_limit_s <= 0:
         return IlpResult({0}, 0.0, False, float("inf"), {"solver_skipped": True})
+
+    def out_of_time() -> bool:
+        return time_limit_s is not None and time.perf_counter() - t0 >= time_limit_s
+
+    skipped = IlpResult({0}, 0.0, False, float("inf"), {"solver_skipped": True})
     keep = reduce_dominated(problem)
+    if out_of_time():  # the phases before the solver are not interrupted, but checked
+        return skipped
     model = DirectedCutModel(problem, keep)
+    if out_of_time():
+        return skipped
     if CONFLICT_SIZE >= 2:
         model.conflicts = frontier_conflicts(problem, keep, CONFLICT_SIZE)
     hint = _incumbent(problem, keep)
