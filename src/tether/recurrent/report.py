@@ -34,55 +34,13 @@ import numpy as np
 
 from tether.experiments.executors import Trial
 from tether.experiments.sweep import run_trials
+from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir, settings_table
 from tether.recurrent.report_tables import run_statistics
 from tether.runfolder import machine
 
 __all__ = ["make_report", "trial_scenario"]
 
 MAPS_DIR = Path(__file__).resolve().parents[3] / ".." / "shared" / "maps"
-MAP_LABELS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
-
-
-# ---------------------------------------------------------------------- runs
-def _run_dir(out: Path, m: str, label: str, settings: dict[str, dict[str, Any]], k: int) -> Path:
-    """Run folder of ``label``; settings identical to an earlier one share its runs.
-
-    ``apx_t12_instant`` (Fig. 4b) and ``theta12`` (Figs. 5-6) are the same
-    setting; with the same seed the simulation is deterministic, so it runs once
-    (under ``theta12``).
-    """
-    same = [name for name, s in settings.items() if s == settings[label]]
-    canonical = same[-1]  # theta<k> labels come after the Fig. 4 ones
-    return out / "runs" / m / canonical / f"seed-{k}"
-
-
-#: the defaults of the registered strategies, spelled out so a run folder's setting is explicit
-DEFAULT_BINDING = "assigned"
-DEFAULT_COORDINATION = "greedy"
-
-
-def _settings(thetas: tuple[int, ...]) -> dict[str, dict[str, Any]]:
-    """Every setting by label; identical dicts share run folders (the last label names them)."""
-
-    def rec(theta: int, method: str, timed: bool, binding: str = DEFAULT_BINDING) -> dict:
-        return {"kind": "recurrent", "theta": theta, "method": method, "timed": timed,
-                "binding": binding}  # fmt: skip
-
-    out: dict[str, dict[str, Any]] = {
-        "apx_t12_timed": rec(12, "apx", True),
-        "ilp_t12_timed": rec(12, "ilp", True),
-        "apx_t12_instant": rec(12, "apx", False),
-        "ilp_t12_instant": rec(12, "ilp", False),
-    }
-    for th in thetas:
-        out[f"theta{th}"] = rec(th, "apx", False)
-    # relay binding both ways at theta = 1 (the measurement behind the default)
-    for binding in ("assigned", "frontiers"):
-        out[f"theta1_{binding}"] = rec(1, "apx", False, binding)
-    out["utility"] = {"kind": "utility", "coordination": DEFAULT_COORDINATION}
-    for coordination in ("greedy", "none"):
-        out[f"utility_{coordination}"] = {"kind": "utility", "coordination": coordination}
-    return out
 
 
 def trial_scenario(
@@ -163,7 +121,7 @@ def make_report(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     mdir = Path(maps_dir) if maps_dir is not None else MAPS_DIR
-    all_settings = _settings(tuple(thetas))
+    all_settings = settings_table(tuple(thetas))
     chosen = {k: v for k, v in all_settings.items() if settings is None or k in settings}
     trials: list[Trial] = []
     keys: dict[str, list[tuple[str, str, int]]] = {}  # run folder -> (map, label, k)
@@ -174,16 +132,16 @@ def make_report(
         for label, setting in chosen.items():
             data = trial_scenario(map_path, setting, steps, n_robots, check)
             for k in range(runs):
-                run_dir = str(_run_dir(out, m, label, all_settings, k))
-                if run_dir not in keys:  # identical settings share their runs
-                    trials.append(Trial(data, f"report:{m}/{label}", str(mdir), k, run_dir))
-                keys.setdefault(run_dir, []).append((m, label, k))
+                folder = str(run_dir(out, m, label, all_settings, k))
+                if folder not in keys:  # identical settings share their runs
+                    trials.append(Trial(data, f"report:{m}/{label}", str(mdir), k, folder))
+                keys.setdefault(folder, []).append((m, label, k))
     summaries: dict[tuple[str, str, int], dict[str, Any]] = {}
     outcome = run_trials(trials, executor="processes", workers=workers or os.cpu_count())
     if outcome.errors:
         raise RuntimeError("; ".join(outcome.errors[:3]))
-    for run_dir, s in outcome.summaries.items():
-        for key in keys[run_dir]:
+    for folder, s in outcome.summaries.items():
+        for key in keys[folder]:
             summaries[key] = s
             print(
                 f"{key[0]:8s} {key[1]:16s} run{key[2]}: explored {s['final_explored_fraction']:.3f}"
@@ -228,12 +186,6 @@ def make_report(
     return report
 
 
-def _name(label: str) -> str:
-    if label.startswith("utility"):
-        return "Utility" + (f" ({label[8:]})" if label != "utility" else "")
-    return f"θ = {label[5:]}"
-
-
 def _figures(
     out: Path,
     maps: tuple[str, ...],
@@ -248,7 +200,7 @@ def _figures(
     import matplotlib.pyplot as plt
 
     def mean_curve(m: str, label: str) -> tuple[np.ndarray, np.ndarray]:
-        curves = np.array([_curve(_run_dir(out, m, label, all_settings, k)) for k in range(runs)])
+        curves = np.array([_curve(run_dir(out, m, label, all_settings, k)) for k in range(runs)])
         return 100 * curves.mean(axis=0), 100 * curves.std(axis=0)
 
     def band(ax: Any, m: str, label: str, name: str) -> None:
@@ -284,7 +236,7 @@ def _figures(
         fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.8), squeeze=False)
         for ax, m in zip(axes[0], maps, strict=True):
             for label in curves:
-                band(ax, m, label, _name(label))
+                band(ax, m, label, display_name(label))
             ax.set_title(MAP_LABELS.get(m, m))
             ax.set_xlabel("step")
             ax.set_ylabel("explored area [%]")
@@ -298,7 +250,7 @@ def _figures(
         fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.5), squeeze=False)
         for ax, m in zip(axes[0], maps, strict=True):
             e = rep["maps"][m]
-            names = [_name(c).replace(" = ", "=").replace("Utility ", "Utility\n") for c in curves]
+            names = [display_name(c).replace(" = ", "=").replace(" (", "\n(") for c in curves]
             mu = [e[c]["out_of_comm_mean_steps"] for c in curves]
             sd = [e[c]["out_of_comm_std_steps"] for c in curves]
             ax.bar(names, mu, yerr=sd, capsize=3)
