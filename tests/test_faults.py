@@ -63,8 +63,11 @@ def test_relay_failure_triggers_recovery_and_the_mission_goes_on(seed: int) -> N
     log = spy(sim)
     where = sim.pos[victim].copy()
     reconnected = {r: False for r in branch}
+    stranded = np.zeros(sim.n, dtype=int)  # steps standing still with no link to the BS
     for _ in range(120):
         sim.step()
+        still = sim.alive & ~sim.connected & ~sim.moved
+        stranded = np.where(still, stranded + 1, 0)
         assert not sim.alive[victim] and not sim.connected[victim]
         assert np.array_equal(sim.pos[victim], where)  # it stopped for good
         assert not np.isin(sim.links, victim + 1).any()  # and has no link (BS is node 0)
@@ -78,6 +81,7 @@ def test_relay_failure_triggers_recovery_and_the_mission_goes_on(seed: int) -> N
     assert any(p["issued"] and p["step"] > t_fail for p in strat.plans)
     assert sim.explored_fraction() > explored_at_failure
     assert all(reconnected.values())  # cut-off robots found their way back to the BS
+    assert stranded.max() < 40  # and nobody stands cut off for good
     m = strat.metrics()
     assert m["robots_preempted_by_failures"] == len(branch) and m["plans_after_failures"] > 0
 
@@ -121,3 +125,39 @@ def test_failure_schedule() -> None:
     assert failure_schedule(FailureParams(random=9), 4, 100, 1.0, rng).keys() == {0, 1, 2, 3}
     with pytest.raises(ValueError, match="no robot 7"):
         failure_schedule(FailureParams(at_s={7: 1.0}), 4, 100, 1.0, rng)
+
+
+@pytest.mark.parametrize("seed", [3, 5])
+def test_robots_cut_off_by_a_failure_are_recovered_too(seed: int) -> None:
+    """A robot linked to the BS only through the failed one, though bound with it by no ``P_f``."""
+    from tether.graph import components
+
+    strat = RecurrentStrategy(theta=1, check=True)
+    sim = make(strat, seed, n=5)
+    victim = None
+    for _ in range(80):
+        sim.step()
+        keys = strat.goal_keys(sim)
+        for a in range(sim.n):
+            pairs = sim.links[~np.isin(sim.links, a + 1).any(axis=1)]
+            _, lab = components(sim.n + 1, pairs)
+            branch = strat.tracker.branch(a, keys)
+            if any(sim.connected[b] and lab[b + 1] != lab[0] and sim.at_goal[b]
+                   and b not in branch for b in range(sim.n)):  # fmt: skip
+                victim = a
+                break
+        if victim is not None:
+            break
+    assert victim is not None
+    before = sim.connected.copy()
+    sim.cfg.failures = {victim: sim.t + 1}
+    sim.step()
+    lost = set(np.flatnonzero(before & ~sim.connected & sim.at_goal & sim.alive).tolist())
+    recovery = [e for e in sim.events if e["kind"] == "recovery"][-1]
+    assert lost <= set(recovery["preempted"])
+    back = {r: False for r in lost}
+    for _ in range(80):
+        sim.step()
+        for r in lost:
+            back[r] |= bool(sim.connected[r])
+    assert all(back.values()) and strat.violations == []

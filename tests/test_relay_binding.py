@@ -78,3 +78,15 @@ def test_readiness_at_t4_differs_only_for_the_relay_chain() -> None:
     tracker = _tracker("assigned")
     tracker.update(keys, at_goal, delivered)
     assert set(np.flatnonzero(tracker.ready(done, connected, keys)).tolist()) == {4, 5, 6}
+
+
+def test_branch_is_closed_under_shared_relays() -> None:
+    """Preempting a relay shared by two P_f breaks both: both branches are preempted."""
+    tracker = ReadinessTracker()
+    tracker.add(10, [11])  # P of the robot at 10 runs through 11
+    tracker.add(12, [11, 13])  # so does the one at 12 (and through 13)
+    tracker.add(20, [21])  # another branch
+    keys = np.array([10, 11, 12, 13, 20, 21])
+    assert tracker.branch(0, keys) == {0, 1, 2, 3}
+    assert tracker.branch(3, keys) == {0, 1, 2, 3}
+    assert tracker.branch(5, keys) == {4, 5}

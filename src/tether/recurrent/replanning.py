@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from tether.graph import components
 from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
 from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
 from tether.recurrent.planning.deployment import optimal_deployment
@@ -51,6 +52,7 @@ from tether.recurrent.planning.readiness import (
     binding_targets,
     relay_paths,
 )
+from tether.sensing.links import link_pairs
 
 __all__ = ["RecurrentStrategy", "frontier_utilities"]
 
@@ -129,6 +131,7 @@ class RecurrentStrategy:
         self.finished = False
         self.blocked = np.zeros(sim.n, dtype=bool)
         self.failed_seen = np.zeros(sim.n, dtype=bool)
+        self._was_connected = sim.connected.copy()
         self.recoveries: list[dict[str, Any]] = []
         if self.relay_binding not in BINDINGS:
             raise ValueError(f"relay_binding must be one of {BINDINGS}")
@@ -155,7 +158,7 @@ class RecurrentStrategy:
         return min((x["step"] for x in self.recoveries), default=float("inf"))
 
     def relaying(self, sim: ExplorationSim) -> np.ndarray:
-        """Robots standing at their goal on an open ``P_f`` of another robot's frontier."""
+        """Robots standing at their goal on an open ``P_f`` of another robot's goal."""
         keys = self.goal_keys(sim)
         held: set[int] = set()
         for o in self.tracker.obligations:
@@ -174,6 +177,10 @@ class RecurrentStrategy:
         return c[..., 0] * (sim.shape[1] // f + 1) + c[..., 1]
 
     def update(self, sim: ExplorationSim) -> None:
+        self._update(sim)
+        self._was_connected = sim.connected.copy()
+
+    def _update(self, sim: ExplorationSim) -> None:
         for r in np.flatnonzero(self.blocked):
             self.abort(sim, int(r))
         self.blocked[:] = False
@@ -210,10 +217,21 @@ class RecurrentStrategy:
         sim.log("abort", robot=robot, preempted=branch)
 
     def recover(self, sim: ExplorationSim, robot: int) -> None:
-        """``robot`` failed: preempt its branches (Sec. VII-B); cut-off robots head home."""
+        """``robot`` failed: preempt its branches (Sec. VII-B); cut-off robots head home.
+
+        The branches are those of the failed robot, of every robot standing at its
+        goal that lost its link to the BS with the failure, and of every robot whose
+        goal no longer links to the BS through the goals of the live robots (the
+        configurations treat non-ready goals as linked, Sec. IV-A, which the failed
+        robot's goal may have been needed for; ``C^t`` on the BS's known map).
+        """
         keys = self.goal_keys(sim)
         keys[robot] = self._key(sim, sim.goal_at_failure[robot])  # where it was bound
-        branch = sorted(r for r in self.tracker.branch(robot, keys) if r != robot)
+        lost = self._was_connected & ~sim.connected & sim.alive & sim.at_goal
+        branch_set = self.tracker.branch(robot, keys)
+        for r in np.flatnonzero(lost | self._orphans(sim)):
+            branch_set |= self.tracker.branch(int(r), keys)
+        branch = sorted(r for r in branch_set if r != robot)
         self.tracker.drop({int(keys[r]) for r in [robot, *branch]})
         homing = []
         for r in branch:
@@ -224,6 +242,17 @@ class RecurrentStrategy:
                 homing.append(r)
         self.recoveries.append({"step": sim.t, "robot": robot, "preempted": branch})
         sim.log("recovery", robot=robot, preempted=branch, homing=homing)
+
+    @staticmethod
+    def _orphans(sim: ExplorationSim) -> np.ndarray:
+        """Live robots whose goal does not link to the BS through live robots' goals."""
+        live = np.flatnonzero(sim.alive)
+        points = np.vstack([sim.base[None], sim.goal[live]])
+        free = sim.knowledge.global_known & ~sim.occupied
+        _, lab = components(len(points), link_pairs(sim.link, free, points))
+        out = np.zeros(sim.n, dtype=bool)
+        out[live] = lab[1:] != lab[0]
+        return out
 
     @staticmethod
     def _head_home(sim: ExplorationSim, r: int) -> bool:
@@ -296,8 +325,8 @@ class RecurrentStrategy:
         planning_time = time.perf_counter() - tic
         if self.check:
             # the BS vertex is always part of the network: robots waiting there need no goal
-            previous = {int(r): int(goal_v[r]) for r in nonready if goal_v[r] != 0}
-            previous |= {int(r): int(goal_v[r]) for r in ready_ids if goal_v[r] != 0}
+            alive = np.flatnonzero(sim.alive)
+            previous = {int(r): int(goal_v[r]) for r in alive if goal_v[r] != 0}
             problems = check_configuration(
                 nxg,
                 0,

@@ -151,12 +151,21 @@ class ReadinessTracker:
         self.obligations.append(Obligation(int(target), frozenset(members) | {int(target)}, plan))
 
     def branch(self, robot: int, goal_keys: np.ndarray) -> set[int]:
-        """Robots sharing an outstanding obligation with ``robot`` (its plan branches)."""
-        key = int(goal_keys[robot])
-        locs = {key}
-        for o in self.obligations:
-            if key in o.members:
-                locs |= o.members
+        """Robots of the branches ``robot`` belongs to (Sec. VII-B), transitively.
+
+        The robots sharing an outstanding obligation with ``robot``; preempting
+        them breaks every other obligation they hold too (a relay shared by two
+        branches), so the robots of those join, until no obligation is left
+        half-preempted.
+        """
+        locs = {int(goal_keys[robot])}
+        grew = True
+        while grew:
+            grew = False
+            for o in self.obligations:
+                if o.members & locs and not o.members <= locs:
+                    locs |= o.members
+                    grew = True
         return {r for r in range(len(goal_keys)) if int(goal_keys[r]) in locs} | {robot}
 
     def drop(self, locations: set[int]) -> None:
