@@ -64,4 +64,5 @@ def test_comparison_tables_from_a_tiny_report(tmp_path: Path) -> None:
     cell = f"{mu:.1f}" if half is None else f"{mu:.1f} [{mu - half:.1f}, {mu + half:.1f}]"
     assert f"| tiny | θ = 1 | **{cell}** |" in table
     assert "| tiny | θ = 1 − Utility (none) |" in table
-    assert (tmp_path / "out" / "fig5.png").exists() and (tmp_path / "out" / "fig6.png").exists()
+    for fig in ("fig5.png", "fig6.png", "fig_time.png"):
+        assert (tmp_path / "out" / fig).exists()

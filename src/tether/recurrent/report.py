@@ -260,6 +260,30 @@ def _figures(
         fig.tight_layout()
         fig.savefig(out / "fig6.png", dpi=120)
         plt.close(fig)
+        _time_shares_figure(out, maps, curves, rep, plt)
+
+
+def _time_shares_figure(out: Path, maps: tuple[str, ...], curves: list[str], rep: dict,
+                        plt: Any) -> None:  # fmt: skip
+    """Where the robots' time goes: stacked shares per setting and map (``fig_time.png``)."""
+    states = ("moving", "relaying", "waiting", "returning")
+    fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.5), squeeze=False)
+    for ax, m in zip(axes[0], maps, strict=True):
+        e = rep["maps"][m]
+        shown = [c for c in curves if e[c].get("time_moving_frac_mean") is not None]
+        names = [display_name(c).replace(" = ", "=").replace(" (", "\n(") for c in shown]
+        bottom = np.zeros(len(shown))
+        for state in states:
+            share = np.array([100 * e[c][f"time_{state}_frac_mean"] for c in shown])
+            ax.bar(names, share, bottom=bottom, label=state)
+            bottom += share
+        ax.set_title(MAP_LABELS.get(m, m))
+        ax.set_ylabel("robot time [%]")
+        ax.set_ylim(0, 100)
+    axes[0][0].legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(out / "fig_time.png", dpi=120)
+    plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> None:
