@@ -16,11 +16,22 @@ Details of this re-implementation:
 * frontier vertices and gains are those of the BS planner (clusters snapped
   to the coarse grid, ``g(f)`` = unknown cells within sensor range) but on the
   robot's map; utility is eq. (1) with the robot's own geodesic distance;
-* robots that can talk coordinate greedily: the best (robot, frontier) pair
-  of the group is fixed first, then the next, no two robots on one frontier;
+* ``coordination="greedy"`` (default): robots that can talk coordinate
+  greedily: the best (robot, frontier) pair of the group is fixed first, then
+  the next, no two robots on one frontier, and frontiers that teammates of the
+  group are heading to are not chosen again. This is what de Hoog et al.'s
+  implementation (MRESim, which the paper ran) does: a robot ranks the
+  (robot, frontier) utilities of itself and of the teammates it communicates
+  with and takes the best frontier no better-placed teammate would take
+  (``exploration/FrontierExploration.java``, ``chooseFrontier``);
+* ``coordination="none"``: every robot picks the best frontier on its own map
+  by its own utility, ignoring what teammates pick (the paper's sentence "each
+  robot chooses autonomously ... in a greedy fashion" read literally): two
+  robots may head to one frontier. Robots that meet still merge maps;
 * a robot re-chooses when it reached (and scanned) its frontier, or when its
   goal stopped being a frontier on its map (checked every ``check_every`` steps);
-* returning robots head for the BS and resume exploring once connected.
+* returning robots head for the BS and resume exploring once connected;
+* failed robots (``sim.alive``) are left alone.
 """
 
 from __future__ import annotations
@@ -42,6 +53,7 @@ class UtilityStrategy:
     """Greedy frontier utility with return-to-BS rule ``ratio`` (the paper's ``r``)."""
 
     ratio: float = 0.5
+    coordination: str = "greedy"
     check_every: int = 5
     name: str = "utility"
     choices: int = 0
@@ -49,6 +61,8 @@ class UtilityStrategy:
     planning_times: list[float] = field(default_factory=list)
 
     def start(self, sim: ExplorationSim) -> None:
+        if self.coordination not in ("greedy", "none"):
+            raise ValueError(f"coordination must be 'greedy' or 'none' (got {self.coordination!r})")
         self.bs_known = np.full(sim.n, np.count_nonzero(sim.knowledge.global_known), dtype=float)
         self.exhausted = np.zeros(sim.n, dtype=bool)  # no frontier on its map
         self._known_at_exhaustion = np.zeros(sim.n, dtype=np.int64)
@@ -72,7 +86,7 @@ class UtilityStrategy:
         # returning robots that reached the BS's network resume exploring
         back = home & sim.connected
         choose = set(np.flatnonzero(back).tolist())
-        for r in range(sim.n):
+        for r in np.flatnonzero(sim.alive).tolist():
             own = np.count_nonzero(know.local_known[r])
             if self.exhausted[r] and own != self._known_at_exhaustion[r]:
                 self.exhausted[r] = False  # its map grew: look again
@@ -82,9 +96,10 @@ class UtilityStrategy:
                 self._go_home(sim, r)
         kinds = sim.goal_kind
         finished = sim.at_goal & sim.scanned & (kinds != GoalKind.HOME) & ~self.exhausted
-        choose |= set(np.flatnonzero(finished).tolist())
+        choose |= set(np.flatnonzero(finished & sim.alive).tolist())
+        choose -= set(np.flatnonzero(~sim.alive).tolist())
         if sim.t % self.check_every == 0:
-            for r in np.flatnonzero((kinds == GoalKind.FRONTIER) & ~sim.at_goal):
+            for r in np.flatnonzero((kinds == GoalKind.FRONTIER) & ~sim.at_goal & sim.alive):
                 if window_counts(~know.local_known[r], sim.goal[r : r + 1], 1)[0] == 0:
                     choose.add(int(r))
         if choose:
@@ -136,13 +151,14 @@ class UtilityStrategy:
             nd = snap_cluster(cluster, coarse, allowed)
             if nd >= 0 and nd not in nodes:
                 nodes.append(nd)
-        # frontiers already targeted by teammates of the group are taken
-        taken = {
-            int(coarse.node_at(sim.goal[r])[0])
-            for r in group
-            if r not in members and sim.goal_kind[r] == GoalKind.FRONTIER
-        }
-        nodes = [nd for nd in nodes if nd not in taken]
+        if self.coordination == "greedy":
+            # frontiers already targeted by teammates of the group are taken
+            taken = {
+                int(coarse.node_at(sim.goal[r])[0])
+                for r in group
+                if r not in members and sim.goal_kind[r] == GoalKind.FRONTIER
+            }
+            nodes = [nd for nd in nodes if nd not in taken]
         if not nodes:
             for r in members:
                 self._exhaust(sim, r)
@@ -154,6 +170,16 @@ class UtilityStrategy:
         d = dist[:, nodes_arr]
         util = gain[None, :] / np.maximum(d, 1.0) ** 2  # eq. (1) per robot
         util[~np.isfinite(d)] = -1.0
+        if self.coordination == "none":  # each robot on its own: its best frontier
+            for k, r in enumerate(members):
+                f = int(np.argmax(util[k]))
+                if util[k, f] < 0:
+                    self._exhaust(sim, r)
+                    continue
+                path = np.vstack([sim.pos[r : r + 1], coarse.path(pred[k], int(nodes_arr[f]))])
+                sim.assign(r, pos[f], GoalKind.FRONTIER, path)
+                self.choices += 1
+            return
         free_r = list(range(len(members)))
         free_f = set(range(len(nodes)))
         while free_r and free_f:

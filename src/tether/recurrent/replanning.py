@@ -10,12 +10,23 @@ plans for them:
    ``"ilp"``) with the non-ready robots' goals as fixed relays;
 4. the deployment (Sec. V): Hungarian assignment of the ready and the
    connected non-ready robots, surplus robots to "fake" frontiers;
-5. the relay paths ``P_f`` of the plan's frontiers bind robots until the
-   frontier data reaches the BS (Sec. VI).
+5. the relay paths ``P_f`` bind robots until ``f``'s data reaches the BS
+   (Sec. VI). ``relay_binding="frontiers"`` is the paper's rule: ``P_f`` for
+   every frontier and fake frontier of the plan. ``"assigned"`` (the default,
+   a deviation chosen by measurement, see ``docs/recurrent.md``) also binds
+   a ``P_f`` for every other robot the plan sends to a new goal (relays and
+   re-assigned busy robots), so a relay is held until the chain that links
+   its own goal to the BS has formed.
 
 Recovery (Sec. VII-B): a robot that cannot reach its goal aborts; all robots
 of the branches it belongs to (those bound with it by some ``P_f``) are
-preempted, stop where they are and become ready for a new plan.
+preempted, stop where they are and become ready for a new plan. A robot that
+fails (``sim.alive``; the BS is told at once) is treated the same way and
+leaves the team: its goal is no longer kept in configurations, and ``theta``
+counts only live robots. Preempted robots that the failure cut off from the
+BS cannot be reached by a plan; they head back towards the BS on their own
+map until they link to it again, stop there and become ready (an addition:
+the paper's recovery assumes the BS can reach the preempted robots).
 
 A failed attempt (no frontier reachable within the budget) is retried when
 the ready set changes, or after ``retry_steps`` steps if the BS map grew.
@@ -30,11 +41,18 @@ from typing import Any
 
 import numpy as np
 
+from tether.graph import components
 from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
 from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
 from tether.recurrent.planning.deployment import optimal_deployment
 from tether.recurrent.planning.expgraph import FRONTIER, ExplorationGraph, GraphBuilder
-from tether.recurrent.planning.readiness import ReadinessTracker, relay_paths
+from tether.recurrent.planning.readiness import (
+    BINDINGS,
+    ReadinessTracker,
+    binding_targets,
+    relay_paths,
+)
+from tether.sensing.links import link_pairs
 
 __all__ = ["RecurrentStrategy", "frontier_utilities"]
 
@@ -76,7 +94,11 @@ class RecurrentStrategy:
     retry_steps
         Minimum steps between two failed attempts with the same ready set.
     time_limit_s
-        ILP time limit per plan.
+        Time budget of one plan with ``method="ilp"``: the exact solver returns
+        the best configuration found within it (``proven_optimal`` false, APX
+        as fallback; see :func:`optimal_configuration`).
+    relay_binding
+        ``"assigned"`` or ``"frontiers"`` (the paper's Sec. VI rule), see above.
     """
 
     theta: int = 1
@@ -86,7 +108,8 @@ class RecurrentStrategy:
     count_planning_time: bool = False
     check: bool = False
     retry_steps: int = 10
-    time_limit_s: float | None = 60.0
+    time_limit_s: float | None = 10.0
+    relay_binding: str = "assigned"
     name: str = "recurrent"
     plans: list[dict[str, Any]] = field(default_factory=list)
     violations: list[str] = field(default_factory=list)
@@ -107,35 +130,72 @@ class RecurrentStrategy:
         self._last_attempt: tuple[frozenset[int], int, int] | None = None
         self.finished = False
         self.blocked = np.zeros(sim.n, dtype=bool)
+        self.failed_seen = np.zeros(sim.n, dtype=bool)
+        self._was_connected = sim.connected.copy()
+        self.recoveries: list[dict[str, Any]] = []
+        if self.relay_binding not in BINDINGS:
+            raise ValueError(f"relay_binding must be one of {BINDINGS}")
 
     def metrics(self) -> dict[str, Any]:
-        times = [p["planning_time_s"] for p in self.plans if p["issued"]]
+        issued = [p for p in self.plans if p["issued"]]
+        times = [p["planning_time_s"] for p in issued]
         return {
-            "plans": int(sum(p["issued"] for p in self.plans)),
+            "plans": len(issued),
             "plan_attempts": len(self.plans),
             "planning_time_mean_s": float(np.mean(times)) if times else 0.0,
             "planning_time_max_s": float(np.max(times)) if times else 0.0,
             "planning_time_total_s": float(np.sum(times)) if times else 0.0,
             "constraint_violations": len(self.violations),
             "exploration_finished": self.finished,
+            "plans_not_proven_optimal": sum(not p.get("proven_optimal", True) for p in issued),
+            "plans_timed_out": sum(bool(p.get("timed_out", False)) for p in issued),
+            "plans_after_failures": sum(p["step"] >= self._first_failure for p in issued),
+            "robots_preempted_by_failures": sum(len(x["preempted"]) for x in self.recoveries),
         }
+
+    @property
+    def _first_failure(self) -> float:
+        return min((x["step"] for x in self.recoveries), default=float("inf"))
+
+    def relaying(self, sim: ExplorationSim) -> np.ndarray:
+        """Robots standing at their goal on an open ``P_f`` of another robot's goal."""
+        keys = self.goal_keys(sim)
+        held: set[int] = set()
+        for o in self.tracker.obligations:
+            held |= o.members - {o.target}
+        on = np.array([int(k) in held for k in keys.tolist()], dtype=bool)
+        return on & sim.at_goal & ~sim.moved & sim.alive
 
     def goal_keys(self, sim: ExplorationSim) -> np.ndarray:
         """Coarse node of every robot's goal (location keys for readiness)."""
+        return self._key(sim, sim.goal)
+
+    @staticmethod
+    def _key(sim: ExplorationSim, points: np.ndarray) -> np.ndarray:
         f = sim.cfg.coarse_factor
-        c = np.floor(sim.goal / f).astype(np.intp)
-        return c[:, 0] * (sim.shape[1] // f + 1) + c[:, 1]
+        c = np.floor(np.asarray(points, dtype=float) / f).astype(np.intp)
+        return c[..., 0] * (sim.shape[1] // f + 1) + c[..., 1]
 
     def update(self, sim: ExplorationSim) -> None:
+        self._update(sim)
+        self._was_connected = sim.connected.copy()
+
+    def _update(self, sim: ExplorationSim) -> None:
         for r in np.flatnonzero(self.blocked):
             self.abort(sim, int(r))
         self.blocked[:] = False
+        for r in np.flatnonzero(~sim.alive & ~self.failed_seen):
+            self.failed_seen[r] = True
+            self.recover(sim, int(r))
+        # robots cut off by a failure that found the BS's network again stop there
+        for r in np.flatnonzero((sim.goal_kind == GoalKind.HOME) & sim.connected):
+            sim.stop(int(r))
         keys = self.goal_keys(sim)
         self.tracker.update(keys, sim.at_goal, sim.delivered)
-        done = sim.at_goal & sim.scanned
+        done = sim.at_goal & sim.scanned & sim.alive
         ready = self.tracker.ready(done, sim.connected, keys)
         n_ready = int(ready.sum())
-        if n_ready < min(self.theta, sim.n) or n_ready == 0:
+        if n_ready < min(self.theta, int(sim.alive.sum())) or n_ready == 0:
             return
         ready_set = frozenset(np.flatnonzero(ready).tolist())
         version = sim.knowledge.global_version
@@ -156,18 +216,71 @@ class RecurrentStrategy:
             sim.stop(r)
         sim.log("abort", robot=robot, preempted=branch)
 
+    def recover(self, sim: ExplorationSim, robot: int) -> None:
+        """``robot`` failed: preempt its branches (Sec. VII-B); cut-off robots head home.
+
+        The branches are those of the failed robot, of every robot standing at its
+        goal that lost its link to the BS with the failure, and of every robot whose
+        goal no longer links to the BS through the goals of the live robots (the
+        configurations treat non-ready goals as linked, Sec. IV-A, which the failed
+        robot's goal may have been needed for; ``C^t`` on the BS's known map).
+        """
+        keys = self.goal_keys(sim)
+        keys[robot] = self._key(sim, sim.goal_at_failure[robot])  # where it was bound
+        lost = self._was_connected & ~sim.connected & sim.alive & sim.at_goal
+        branch_set = self.tracker.branch(robot, keys)
+        for r in np.flatnonzero(lost | self._orphans(sim)):
+            branch_set |= self.tracker.branch(int(r), keys)
+        branch = sorted(r for r in branch_set if r != robot)
+        self.tracker.drop({int(keys[r]) for r in [robot, *branch]})
+        homing = []
+        for r in branch:
+            if not sim.alive[r]:
+                continue
+            sim.stop(r)
+            if not sim.connected[r] and self._head_home(sim, r):
+                homing.append(r)
+        self.recoveries.append({"step": sim.t, "robot": robot, "preempted": branch})
+        sim.log("recovery", robot=robot, preempted=branch, homing=homing)
+
+    @staticmethod
+    def _orphans(sim: ExplorationSim) -> np.ndarray:
+        """Live robots whose goal does not link to the BS through live robots' goals."""
+        live = np.flatnonzero(sim.alive)
+        points = np.vstack([sim.base[None], sim.goal[live]])
+        free = sim.knowledge.global_known & ~sim.occupied
+        _, lab = components(len(points), link_pairs(sim.link, free, points))
+        out = np.zeros(sim.n, dtype=bool)
+        out[live] = lab[1:] != lab[0]
+        return out
+
+    @staticmethod
+    def _head_home(sim: ExplorationSim, r: int) -> bool:
+        """Send ``r`` towards the BS on its own map (False if it knows no way)."""
+        coarse = sim.coarse_known(sim.knowledge.local_known[r])
+        src = int(coarse.node_at(sim.pos[r])[0])
+        dst = int(coarse.node_at(sim.base)[0])
+        if src < 0 or dst < 0:
+            return False
+        _, pred = coarse.distances([src], predecessors=True)
+        if src != dst and pred[0, dst] < 0:
+            return False
+        path = np.vstack([sim.pos[r : r + 1], coarse.path(pred[0], dst)])
+        sim.assign(r, sim.base, GoalKind.HOME, path)
+        return True
+
     # ------------------------------------------------------------------ planning
     def plan(self, sim: ExplorationSim, ready: np.ndarray) -> None:
         tic = time.perf_counter()
         coarse = sim.coarse_known()
         keys = self.goal_keys(sim)
-        for r in range(sim.n):  # robots stand on (or head to) vertices
+        for r in np.flatnonzero(sim.alive):  # robots stand on (or head to) vertices
             self.visited.setdefault(int(keys[r]), sim.goal[r].copy())
         relays = np.array(list(self.visited.values())).reshape(-1, 2)
         graph = self.builder.build(sim.knowledge.global_known, sim.base, relays, coarse)
         goal_v = np.array([graph.vertex_of_node(int(coarse.node_at(g)[0])) for g in sim.goal])
         ready_ids = np.flatnonzero(ready)
-        nonready = np.flatnonzero(~ready)
+        nonready = np.flatnonzero(~ready & sim.alive)
         fixed = {int(goal_v[r]) for r in nonready if goal_v[r] > 0}
         movable = np.flatnonzero(ready | sim.connected)  # constraint (IV)
         dist, pred = self._distances(graph, sim.pos[movable])
@@ -184,7 +297,7 @@ class RecurrentStrategy:
             "issued": False,
         }
         if not utilities:
-            if len(ready_ids) == sim.n and len(graph.frontiers) == 0:
+            if len(ready_ids) == sim.alive.sum() and len(graph.frontiers) == 0:
                 self.finished = True
             record.update(planning_time_s=time.perf_counter() - tic, utility=0.0, size=0)
             self.plans.append(record)
@@ -212,7 +325,8 @@ class RecurrentStrategy:
         planning_time = time.perf_counter() - tic
         if self.check:
             # the BS vertex is always part of the network: robots waiting there need no goal
-            previous = {int(r): int(goal_v[r]) for r in range(sim.n) if goal_v[r] != 0}
+            alive = np.flatnonzero(sim.alive)
+            previous = {int(r): int(goal_v[r]) for r in alive if goal_v[r] != 0}
             problems = check_configuration(
                 nxg,
                 0,
@@ -252,6 +366,8 @@ class RecurrentStrategy:
             n_assigned=len(assignment),
             method=conf.method,
             proven_optimal=conf.proven_optimal,
+            timed_out=conf.timed_out,
+            fallback=conf.fallback,
         )
         self.plans.append(record)
         sim.log("plan", **record)
@@ -302,10 +418,10 @@ class RecurrentStrategy:
         fake: set[int],
         coarse: Any,
     ) -> None:
-        """Relay paths ``P_f`` of the plan's (real and fake) frontiers (Sec. VI)."""
+        """Relay paths ``P_f`` of the plan (Sec. VI; whose: ``relay_binding``)."""
         goals: dict[int, int] = {}
         times: dict[int, float] = {}
-        for r in range(sim.n):
+        for r in np.flatnonzero(sim.alive).tolist():
             v = graph.vertex_of_node(int(coarse.node_at(sim.goal[r])[0]))
             if v < 0 or v in goals.values():
                 continue
@@ -316,7 +432,9 @@ class RecurrentStrategy:
             # docs/recurrent.md)
             wait = sim.hold_steps(r)
             times[r] = wait + sim.remaining_distance(r) / sim.cfg.speed_cells + scan
-        targets = [r for r in assignment if r in goals]
+        frontier_like = {v for v in assignment.values() if graph.kind[v] == FRONTIER} | fake
+        targets = binding_targets(assignment, frontier_like, self.relay_binding)
+        targets = [r for r in targets if r in goals]
         paths = relay_paths(goals, times, targets, graph.edges, base=0)
         keys = self.goal_keys(sim)
         for f, members in paths.items():

@@ -34,38 +34,13 @@ import numpy as np
 
 from tether.experiments.executors import Trial
 from tether.experiments.sweep import run_trials
+from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir, settings_table
+from tether.recurrent.report_tables import run_statistics
 from tether.runfolder import machine
 
 __all__ = ["make_report", "trial_scenario"]
 
 MAPS_DIR = Path(__file__).resolve().parents[3] / ".." / "shared" / "maps"
-MAP_LABELS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
-
-
-# ---------------------------------------------------------------------- runs
-def _run_dir(out: Path, m: str, label: str, settings: dict[str, dict[str, Any]], k: int) -> Path:
-    """Run folder of ``label``; settings identical to an earlier one share its runs.
-
-    ``apx_t12_instant`` (Fig. 4b) and ``theta12`` (Figs. 5-6) are the same
-    setting; with the same seed the simulation is deterministic, so it runs once
-    (under ``theta12``).
-    """
-    same = [name for name, s in settings.items() if s == settings[label]]
-    canonical = same[-1]  # theta<k> labels come after the Fig. 4 ones
-    return out / "runs" / m / canonical / f"seed-{k}"
-
-
-def _settings(thetas: tuple[int, ...]) -> dict[str, dict[str, Any]]:
-    out: dict[str, dict[str, Any]] = {
-        "apx_t12_timed": {"kind": "recurrent", "theta": 12, "method": "apx", "timed": True},
-        "ilp_t12_timed": {"kind": "recurrent", "theta": 12, "method": "ilp", "timed": True},
-        "apx_t12_instant": {"kind": "recurrent", "theta": 12, "method": "apx", "timed": False},
-        "ilp_t12_instant": {"kind": "recurrent", "theta": 12, "method": "ilp", "timed": False},
-    }
-    for th in thetas:
-        out[f"theta{th}"] = {"kind": "recurrent", "theta": th, "method": "apx", "timed": False}
-    out["utility"] = {"kind": "utility"}
-    return out
 
 
 def trial_scenario(
@@ -73,12 +48,17 @@ def trial_scenario(
 ) -> dict[str, Any]:
     """The scenario of one setting on one map (the paper's Sec. VII-A at 0.1 m per cell)."""
     if setting["kind"] == "utility":
-        strategy: dict[str, Any] = {"name": "utility", "params": {"ratio": 0.5}}
+        strategy: dict[str, Any] = {
+            "name": "utility",
+            "params": {"ratio": 0.5, "coordination": setting["coordination"]},
+        }
     else:
+        # Fig. 4's ILP runs had a 60 s limit per plan (none was reached)
         strategy = {
             "name": "recurrent",
             "params": {"theta": setting["theta"], "method": setting["method"], "delta": 4,
-                       "count_planning_time": setting["timed"], "check": check},
+                       "count_planning_time": setting["timed"], "check": check,
+                       "relay_binding": setting["binding"], "time_limit_s": 60.0},
         }  # fmt: skip
     return {
         "name": f"recurrent-report-{map_path.stem}",
@@ -141,7 +121,7 @@ def make_report(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     mdir = Path(maps_dir) if maps_dir is not None else MAPS_DIR
-    all_settings = _settings(tuple(thetas))
+    all_settings = settings_table(tuple(thetas))
     chosen = {k: v for k, v in all_settings.items() if settings is None or k in settings}
     trials: list[Trial] = []
     keys: dict[str, list[tuple[str, str, int]]] = {}  # run folder -> (map, label, k)
@@ -152,16 +132,16 @@ def make_report(
         for label, setting in chosen.items():
             data = trial_scenario(map_path, setting, steps, n_robots, check)
             for k in range(runs):
-                run_dir = str(_run_dir(out, m, label, all_settings, k))
-                if run_dir not in keys:  # identical settings share their runs
-                    trials.append(Trial(data, f"report:{m}/{label}", str(mdir), k, run_dir))
-                keys.setdefault(run_dir, []).append((m, label, k))
+                folder = str(run_dir(out, m, label, all_settings, k))
+                if folder not in keys:  # identical settings share their runs
+                    trials.append(Trial(data, f"report:{m}/{label}", str(mdir), k, folder))
+                keys.setdefault(folder, []).append((m, label, k))
     summaries: dict[tuple[str, str, int], dict[str, Any]] = {}
     outcome = run_trials(trials, executor="processes", workers=workers or os.cpu_count())
     if outcome.errors:
         raise RuntimeError("; ".join(outcome.errors[:3]))
-    for run_dir, s in outcome.summaries.items():
-        for key in keys[run_dir]:
+    for folder, s in outcome.summaries.items():
+        for key in keys[folder]:
             summaries[key] = s
             print(
                 f"{key[0]:8s} {key[1]:16s} run{key[2]}: explored {s['final_explored_fraction']:.3f}"
@@ -196,6 +176,7 @@ def make_report(
                 "plans_mean": float(np.mean([s.get("plans", 0) for s in ss])),
                 "constraint_violations": int(sum(s.get("constraint_violations", 0) for s in ss)),
                 "wall_time_mean_s": float(np.mean([s["wall_time_s"] for s in ss])),
+                **run_statistics(ss),
             }
         report["maps"][m] = {**old.get("maps", {}).get(m, {}), **entry}
     for m, entry in old.get("maps", {}).items():
@@ -219,7 +200,7 @@ def _figures(
     import matplotlib.pyplot as plt
 
     def mean_curve(m: str, label: str) -> tuple[np.ndarray, np.ndarray]:
-        curves = np.array([_curve(_run_dir(out, m, label, all_settings, k)) for k in range(runs)])
+        curves = np.array([_curve(run_dir(out, m, label, all_settings, k)) for k in range(runs)])
         return 100 * curves.mean(axis=0), 100 * curves.std(axis=0)
 
     def band(ax: Any, m: str, label: str, name: str) -> None:
@@ -249,14 +230,13 @@ def _figures(
         plt.close(fig)
 
     curves = [f"theta{th}" for th in thetas if f"theta{th}" in chosen]
-    if "utility" in chosen:
-        curves.append("utility")
+    both = [u for u in ("utility_greedy", "utility_none") if u in chosen]
+    curves += both or (["utility"] if "utility" in chosen else [])
     if curves:
         fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.8), squeeze=False)
         for ax, m in zip(axes[0], maps, strict=True):
             for label in curves:
-                name = "Utility" if label == "utility" else f"θ = {label[5:]}"
-                band(ax, m, label, name)
+                band(ax, m, label, display_name(label))
             ax.set_title(MAP_LABELS.get(m, m))
             ax.set_xlabel("step")
             ax.set_ylabel("explored area [%]")
@@ -270,7 +250,7 @@ def _figures(
         fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.5), squeeze=False)
         for ax, m in zip(axes[0], maps, strict=True):
             e = rep["maps"][m]
-            names = ["Utility" if c == "utility" else f"θ={c[5:]}" for c in curves]
+            names = [display_name(c).replace(" = ", "=").replace(" (", "\n(") for c in curves]
             mu = [e[c]["out_of_comm_mean_steps"] for c in curves]
             sd = [e[c]["out_of_comm_std_steps"] for c in curves]
             ax.bar(names, mu, yerr=sd, capsize=3)
@@ -280,6 +260,30 @@ def _figures(
         fig.tight_layout()
         fig.savefig(out / "fig6.png", dpi=120)
         plt.close(fig)
+        _time_shares_figure(out, maps, curves, rep, plt)
+
+
+def _time_shares_figure(out: Path, maps: tuple[str, ...], curves: list[str], rep: dict,
+                        plt: Any) -> None:  # fmt: skip
+    """Where the robots' time goes: stacked shares per setting and map (``fig_time.png``)."""
+    states = ("moving", "relaying", "waiting", "returning")
+    fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 3.5), squeeze=False)
+    for ax, m in zip(axes[0], maps, strict=True):
+        e = rep["maps"][m]
+        shown = [c for c in curves if e[c].get("time_moving_frac_mean") is not None]
+        names = [display_name(c).replace(" = ", "=").replace(" (", "\n(") for c in shown]
+        bottom = np.zeros(len(shown))
+        for state in states:
+            share = np.array([100 * e[c][f"time_{state}_frac_mean"] for c in shown])
+            ax.bar(names, share, bottom=bottom, label=state)
+            bottom += share
+        ax.set_title(MAP_LABELS.get(m, m))
+        ax.set_ylabel("robot time [%]")
+        ax.set_ylim(0, 100)
+    axes[0][0].legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(out / "fig_time.png", dpi=120)
+    plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> None:

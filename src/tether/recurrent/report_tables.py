@@ -4,7 +4,10 @@
 ``docs/recurrent.md`` for the runs that :mod:`tether.recurrent.report` wrote under
 ``OUT_DIR/runs/<map>/<setting>/seed-<k>``: explored area known at the BS after 300,
 600 and 900 steps (mean over runs, and mean ± sample sd at the end), the time robots
-spend out of communication (steps per robot), and per-plan solver times.
+spend out of communication (steps per robot), and per-plan solver times (Figs. 4-6);
+theta = 1 against both Utility variants with 95 % confidence intervals (Student t over
+the runs; differences by Welch's t), the relay binding both ways, and where the
+robots' time goes (issue 13). Tables whose runs are missing are left out.
 """
 
 from __future__ import annotations
@@ -17,22 +20,31 @@ import numpy as np
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-__all__ = ["markdown"]
+from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir, settings_table
 
-MAPS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
+__all__ = ["ci95", "markdown", "run_statistics", "welch"]
+
+MAPS = MAP_LABELS
+SETTINGS = settings_table()
 FIG4 = {
     "apx_t12_timed": "APX, (a) planning time counted",
     "ilp_t12_timed": "ILP, (a) planning time counted",
     "theta12": "APX, (b) instantaneous",
     "ilp_t12_instant": "ILP, (b) instantaneous",
 }
-FIG5 = ("theta1", "theta3", "theta6", "theta9", "theta12", "utility")
+FIG5 = ("theta1", "theta3", "theta6", "theta9", "theta12", "utility_greedy", "utility_none")
+COMPARED = ("theta1", "utility_greedy", "utility_none")
 
 
 def _runs(out: Path, m: str, setting: str) -> list[Path]:
-    return sorted(
-        p for p in (out / "runs" / m / setting).glob("seed-*") if (p / "summary.json").exists()
-    )
+    folder = run_dir(out, m, setting, SETTINGS, 0).parent if setting in SETTINGS else None
+    if folder is None or not folder.exists():
+        folder = out / "runs" / m / setting
+    return sorted(p for p in folder.glob("seed-*") if (p / "summary.json").exists())
+
+
+def _summaries(runs: list[Path]) -> list[dict]:
+    return [json.loads((r / "summary.json").read_text()) for r in runs]
 
 
 def _explored(run: Path) -> np.ndarray:
@@ -46,6 +58,62 @@ def _at(curves: list[np.ndarray], step: int) -> float:
 def _pm(values: list[float], fmt: str = "{:.1f}") -> str:
     sd = float(np.std(values, ddof=1)) if len(values) > 1 else 0.0
     return f"{fmt.format(np.mean(values))} ± {fmt.format(sd)}"
+
+
+def ci95(values: list[float | None]) -> tuple[float | None, float | None]:
+    """Mean and half-width of its 95 % confidence interval (Student t), ``None`` if undefined.
+
+    ``None`` values (e.g. a share of the map never reached) are left out.
+    """
+    from scipy.stats import t
+
+    v = np.asarray([x for x in values if x is not None], dtype=float)
+    if len(v) == 0:
+        return None, None
+    if len(v) < 2:
+        return float(v.mean()), None
+    half = t.ppf(0.975, len(v) - 1) * v.std(ddof=1) / np.sqrt(len(v))
+    return float(v.mean()), float(half)
+
+
+def welch(a: list[float], b: list[float]) -> tuple[float, float, float]:
+    """Difference of means ``a - b``, the half-width of its 95 % CI and the p-value (Welch)."""
+    from scipy.stats import t, ttest_ind
+
+    a_, b_ = np.asarray(a, float), np.asarray(b, float)
+    va, vb = a_.var(ddof=1) / len(a_), b_.var(ddof=1) / len(b_)
+    se = np.sqrt(va + vb)
+    diff = float(a_.mean() - b_.mean())
+    if se == 0:
+        return diff, 0.0, 0.0 if diff else 1.0
+    dof = se**4 / (va**2 / (len(a_) - 1) + vb**2 / (len(b_) - 1))
+    p = float(ttest_ind(a_, b_, equal_var=False).pvalue)
+    return diff, float(t.ppf(0.975, dof) * se), p
+
+
+def _mean(values: list) -> float | None:
+    v = [x for x in values if x is not None]
+    return float(np.mean(v)) if v else None
+
+
+#: summary keys of issue 13 that every setting's runs are summarized by
+TIME_TO = ("time_to_50pct_s", "time_to_75pct_s", "time_to_90pct_s")
+SHARES = ("time_moving_frac", "time_relaying_frac", "time_waiting_frac", "time_returning_frac")
+
+
+def run_statistics(summaries: list[dict]) -> dict:
+    """Per-setting statistics of the new summary keys: 95 % CIs, time shares, episodes."""
+    out: dict = {}
+    for key in ("final_explored_fraction", "out_of_comm_mean_steps"):
+        mu, half = ci95([s.get(key) for s in summaries])
+        out[f"{key}_ci95"] = [mu, half]
+    for key in TIME_TO:
+        out[key] = [s.get(key) for s in summaries]
+    for key in SHARES:
+        out[f"{key}_mean"] = _mean([s.get(key) for s in summaries])
+    for key in ("out_of_comm_episodes", "out_of_comm_longest_steps"):
+        out[f"{key}_mean"] = _mean([s.get(key) for s in summaries])
+    return out
 
 
 def _plan_times(runs: list[Path]) -> np.ndarray:
@@ -83,7 +151,7 @@ def markdown(out_dir: str | Path) -> str:
                 f"**{_pm(final)}** | {' '.join(f'{f:.0f}' for f in final)} | "
                 f"{_pm(ooc, '{:.0f}')} | {np.median(pt):.3g} / {pt.max():.3g} |"
             )
-    head = "| map | " + " | ".join(s.replace("theta", "theta = ") for s in FIG5) + " |"
+    head = "| map | " + " | ".join(display_name(s) for s in FIG5) + " |"
     sep = "| --- " * (len(FIG5) + 1) + "|"
     fig5, fig6 = [head, sep], [head, sep]
     for m, name in maps.items():
@@ -102,9 +170,118 @@ def markdown(out_dir: str | Path) -> str:
         fig5.append(f"| {name}, explored at 300 steps [%] | " + " | ".join(at300) + " |")
         fig5.append(f"| {name}, explored at 900 steps [%] | " + " | ".join(at900) + " |")
         fig6.append(f"| {name} [steps per robot, of 900] | " + " | ".join(ooc) + " |")
-    return "\n".join(
-        ["### Fig. 4", "", *lines, "", "### Fig. 5", "", *fig5, "", "### Fig. 6", "", *fig6, ""]
-    )
+    parts = ["### Fig. 4", "", *lines, "", "### Fig. 5", "", *fig5, "", "### Fig. 6", "", *fig6, ""]
+    parts += _comparison(out, maps) + _binding(out, maps) + _shares(out, maps)
+    return "\n".join(parts)
+
+
+def _ci(values: list[float], fmt: str = "{:.1f}") -> str:
+    mu, half = ci95(values)
+    if mu is None:
+        return "-"
+    if half is None:
+        return fmt.format(mu)
+    return f"{fmt.format(mu)} [{fmt.format(mu - half)}, {fmt.format(mu + half)}]"
+
+
+def _time_to(ss: list[dict], key: str) -> str:
+    hit = [s[key] for s in ss if s.get(key) is not None]
+    if not hit:
+        return "never"
+    return f"{np.mean(hit):.0f}" + ("" if len(hit) == len(ss) else f" ({len(hit)}/{len(ss)})")
+
+
+def _comparison(out: Path, maps: dict[str, str]) -> list[str]:
+    """theta = 1 against Utility (greedy, none): CIs of the means and of the differences."""
+    lines = [
+        "### theta = 1 against Utility (95 % confidence intervals)",
+        "",
+        "| map | strategy | explored at 900 steps [%] | per run | time to 50 / 75 / 90 % [s] "
+        "| out of comm [steps per robot] | episodes per robot / longest [steps] |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    diffs = ["", "| map | difference | explored at 900 steps [points] | p (Welch) |",
+             "| --- | --- | --- | --- |"]  # fmt: skip
+    found = False
+    for m, name in maps.items():
+        finals: dict[str, list[float]] = {}
+        for setting in COMPARED:
+            ss = _summaries(_runs(out, m, setting))
+            if not ss:
+                continue
+            found = True
+            fin = [100 * s["final_explored_fraction"] for s in ss]
+            finals[setting] = fin
+            ooc = [s["out_of_comm_mean_steps"] for s in ss]
+            eps = np.mean([s.get("out_of_comm_episodes", np.nan) for s in ss]) / ss[0]["n_robots"]
+            longest = np.mean([s.get("out_of_comm_longest_steps", np.nan) for s in ss])
+            tt = " / ".join(_time_to(ss, f"time_to_{p}pct_s") for p in (50, 75, 90))
+            lines.append(
+                f"| {name} | {display_name(setting)} | **{_ci(fin)}** | "
+                f"{' '.join(f'{f:.0f}' for f in fin)} | {tt} | {_ci(ooc, '{:.0f}')} | "
+                f"{eps:.1f} / {longest:.0f} |"
+            )
+        for other in COMPARED[1:]:
+            if "theta1" in finals and other in finals and len(finals[other]) > 1:
+                d, half, p = welch(finals["theta1"], finals[other])
+                ci = f"{d:+.1f} [{d - half:+.1f}, {d + half:+.1f}]"
+                diffs.append(f"| {name} | θ = 1 − {display_name(other)} | {ci} | {p:.2g} |")
+    return [*lines, *diffs, ""] if found else []
+
+
+def _binding(out: Path, maps: dict[str, str]) -> list[str]:
+    """theta = 1 with P_f for every assigned robot against the paper's rule."""
+    lines = [
+        "### Relay binding at theta = 1 (95 % confidence intervals)",
+        "",
+        "| map | P_f bound for | explored at 900 steps [%] | out of comm [steps per robot] "
+        "| longest episode [steps] | relaying / waiting [% of robot time] |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    found = False
+    for m, name in maps.items():
+        finals = {}
+        for rule in ("assigned", "frontiers"):
+            ss = _summaries(_runs(out, m, f"theta1_{rule}"))
+            if not ss:
+                continue
+            found = True
+            finals[rule] = [100 * s["final_explored_fraction"] for s in ss]
+            ooc = [s["out_of_comm_mean_steps"] for s in ss]
+            longest = [s.get("out_of_comm_longest_steps") for s in ss]
+            rel = 100 * np.mean([s.get("time_relaying_frac", np.nan) for s in ss])
+            wait = 100 * np.mean([s.get("time_waiting_frac", np.nan) for s in ss])
+            who = "every assigned robot" if rule == "assigned" else "(fake) frontiers (paper)"
+            lines.append(
+                f"| {name} | {who} | **{_ci(finals[rule])}** | {_ci(ooc, '{:.0f}')} | "
+                f"{_ci(longest, '{:.0f}')} | {rel:.0f} / {wait:.0f} |"
+            )
+        if len(finals) == 2 and min(len(v) for v in finals.values()) > 1:
+            d, half, p = welch(finals["assigned"], finals["frontiers"])
+            lines.append(f"| {name} | difference | {d:+.1f} [{d - half:+.1f}, {d + half:+.1f}] "
+                         f"(p = {p:.2g}) | | | |")  # fmt: skip
+    return [*lines, ""] if found else []
+
+
+def _shares(out: Path, maps: dict[str, str]) -> list[str]:
+    """Where the robots' time goes: moving / relaying / waiting / returning."""
+    lines = [
+        "### Where the robots' time goes [% of robot time, mean over runs]",
+        "",
+        "| map | strategy | moving | relaying | waiting | returning |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    found = False
+    for m, name in maps.items():
+        for setting in ("theta1", "theta12", "utility_greedy", "utility_none"):
+            ss = _summaries(_runs(out, m, setting))
+            if not ss or "time_moving_frac" not in ss[0]:
+                continue
+            found = True
+            cells = [f"{100 * np.mean([s[f'time_{k}_frac'] for s in ss]):.0f}"
+                     for k in ("moving", "relaying", "waiting", "returning")]  # fmt: skip
+            lines.append(f"| {name} | {display_name(setting)} | " + " | ".join(cells) + " |")
+    return [*lines, ""] if found else []
 
 
 if __name__ == "__main__":

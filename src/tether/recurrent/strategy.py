@@ -19,7 +19,7 @@ baseline. Scenario fields used:
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel, Field
@@ -44,11 +44,43 @@ from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
 __all__ = [
+    "FailureParams",
     "RecurrentExploration",
     "RecurrentParams",
+    "SignalParams",
     "UtilityExploration",
     "UtilityParams",
 ]
+
+
+class SignalParams(BaseModel):
+    """The ``signal`` link model (:class:`tether.sensing.links.SignalLinks`)."""
+
+    model_config = finite_strict()
+
+    ref_power_dbm: float = Field(
+        default=-40.0, ge=-300, le=300, description="received power at ref_distance_m"
+    )
+    ref_distance_m: float = Field(default=1.0, gt=0, le=MAX_LENGTH_M)
+    exponent: float = Field(default=2.5, gt=0, le=20, description="path-loss exponent")
+    wall_loss_db: float = Field(default=3.0, ge=0, le=1000, description="per wall cell crossed")
+    cutoff_dbm: float = Field(default=-70.0, ge=-300, le=300, description="receive threshold")
+
+
+class FailureParams(BaseModel):
+    """Robots that fail (stop, sense nothing, drop their links) during the run."""
+
+    model_config = finite_strict()
+
+    at_s: dict[int, Annotated[float, Field(ge=0, le=1e9)]] = Field(
+        default_factory=dict, description="robot -> failure time"
+    )
+    random: int = Field(
+        default=0, ge=0, le=1_000_000, description="robots failing at uniform random times"
+    )
+    window_s: tuple[float, float] | None = Field(
+        default=None, description="random failure times drawn from [t0, t1] (default: the run)"
+    )
 
 
 class ExplorationParams(BaseModel):
@@ -70,6 +102,8 @@ class ExplorationParams(BaseModel):
     )
     scan_steps: int = Field(default=1, ge=1, le=10_000)
     base_m: list[Coordinate] | None = Field(default=None, description="BS position; random if null")
+    signal: SignalParams = Field(default_factory=SignalParams, description="link_model: signal")
+    failures: FailureParams = Field(default_factory=FailureParams)
 
 
 class RecurrentParams(ExplorationParams):
@@ -81,13 +115,24 @@ class RecurrentParams(ExplorationParams):
     backend: Literal["highs", "scip"] = "highs"
     count_planning_time: bool = False
     check: bool = False
-    time_limit_s: float | None = Field(default=60.0, gt=0, le=1e7)
+    time_limit_s: float | None = Field(
+        default=10.0, gt=0, le=1e7, description="per-plan budget of the ILP (APX as fallback)"
+    )
+    relay_binding: Literal["assigned", "frontiers"] = Field(
+        default="assigned",
+        description="P_f for every robot sent to a new goal, or (the paper) for frontiers only",
+    )
 
 
 class UtilityParams(ExplorationParams):
     """The Utility baseline of de Hoog et al. (return when known-area ratio < ``ratio``)."""
 
     ratio: float = Field(default=0.5, ge=0, le=1)
+    coordination: Literal["greedy", "none"] = Field(
+        default="greedy",
+        description="greedy: joint best-pair assignment inside communicating groups "
+        "(de Hoog et al.'s MRESim); none: every robot on its own",
+    )
 
 
 #: samples of one full depth scan (rays x samples per ray) a scenario may ask for
@@ -132,7 +177,7 @@ def _config(
         sensor_range_cells=sensor_cells,
         sensor_resolution_deg=params.sensor_resolution_deg,
         link_model=params.link_model,
-        link_params={"range_cells": min(cells(params.comm_range_m), diagonal)},
+        link_params=_link_params(params, cells, diagonal),
         coarse_factor=factor,
         scan_steps=params.scan_steps,
     )
@@ -167,6 +212,33 @@ def _check_memory(n_robots: int, grid: OccupancyGrid, source: str) -> None:
             f"{grid.occupied.size:,} cells need about {format_bytes(need)}, more than the "
             f"{format_bytes(budget)} allowed here; use fewer robots or a coarser map"
         )
+
+
+def _link_params(params: ExplorationParams, cells: Any, diagonal: float) -> dict[str, Any]:
+    if params.link_model != "signal":
+        return {"range_cells": min(cells(params.comm_range_m), diagonal)}
+    sig = params.signal.model_dump()
+    sig["ref_distance_cells"] = cells(sig.pop("ref_distance_m"))
+    return sig
+
+
+def failure_schedule(
+    params: FailureParams, n_robots: int, steps: int, dt_s: float, rng: np.random.Generator
+) -> dict[int, int]:
+    """Robot -> failure step: the given times, then ``random`` other robots at random steps."""
+    out: dict[int, int] = {}
+    for r, t in params.at_s.items():
+        if not 0 <= r < n_robots:
+            raise ValueError(f"failures.at_s: no robot {r} in a team of {n_robots}")
+        out[int(r)] = max(int(round(t / dt_s)), 1)
+    others = [r for r in range(n_robots) if r not in out]
+    k = min(params.random, len(others))
+    if k:
+        lo, hi = params.window_s if params.window_s is not None else (dt_s, steps * dt_s)
+        lo_step, hi_step = max(int(round(lo / dt_s)), 1), max(int(round(hi / dt_s)), 1)
+        for r in rng.choice(others, size=k, replace=False).tolist():
+            out[int(r)] = int(rng.integers(lo_step, max(hi_step, lo_step) + 1))
+    return out
 
 
 class _ExplorationPlugin(ExplorationRun):
@@ -230,6 +302,12 @@ class _ExplorationPlugin(ExplorationRun):
     ) -> _ExplorationPlugin:
         grid = cls._grid(scenario, world)
         cfg = _config(params, scenario, grid.resolution_m, grid.shape)
+        try:
+            cfg.failures = failure_schedule(
+                params.failures, cfg.n_robots, cfg.steps, scenario.sim.dt_s, rng
+            )
+        except ValueError as exc:
+            raise ScenarioError(f"{scenario.source}: strategy.params.{exc}") from None
         base_cells = (np.asarray(initial.fixed[0]) - grid.origin_m) / grid.resolution_m
         return cls(cls.make_policy(params), cfg, grid, base_cells)
 
@@ -279,6 +357,7 @@ class RecurrentExploration(_ExplorationPlugin):
             count_planning_time=params.count_planning_time,
             check=params.check,
             time_limit_s=params.time_limit_s,
+            relay_binding=params.relay_binding,
         )
 
 
@@ -291,4 +370,4 @@ class UtilityExploration(_ExplorationPlugin):
 
     @classmethod
     def make_policy(cls, params: UtilityParams) -> UtilityStrategy:
-        return UtilityStrategy(ratio=params.ratio)
+        return UtilityStrategy(ratio=params.ratio, coordination=params.coordination)

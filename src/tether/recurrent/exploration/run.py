@@ -21,10 +21,12 @@ from typing import Any
 import numpy as np
 
 from tether.record import TrajectoryRecorder
+from tether.recurrent.exploration.metrics import MissionMetrics, classify
 from tether.recurrent.exploration.sim import (
     ExplorationConfig,
     ExplorationPolicy,
     ExplorationSim,
+    GoalKind,
     random_base,
     start_cells,
 )
@@ -84,14 +86,27 @@ class ExplorationRun(Strategy):
         self.sim = ExplorationSim(self.grid.occupied, self.base_cells, self.policy, self.cfg)
         self.policy.start(self.sim)
         self.out_steps = np.zeros(self.sim.n, dtype=int)
+        self.mission = MissionMetrics(self.sim.n, self.sim.explored_fraction())
+        self.states = classify(*(np.zeros(self.sim.n, bool),) * 3, self.sim.alive)
+        self.dt_s = 1.0
         self._drain_sim_events()
 
     def step(self, ctx: StepContext) -> TeamState:
         self._step = ctx.step + 1
-        self.sim.step()
-        self.out_steps += ~self.sim.connected
+        self.dt_s = ctx.dt_s
+        sim = self.sim
+        sim.step()
+        self.out_steps += ~sim.connected & sim.alive
+        relaying = getattr(self.policy, "relaying", None)
+        self.states = classify(
+            sim.moved,
+            (sim.goal_kind == GoalKind.HOME) & ~sim.at_goal,
+            relaying(sim) if relaying is not None else np.zeros(sim.n, bool),
+            sim.alive,
+        )
+        self.mission.add(sim.explored_fraction(), self.states, sim.connected)
         self._drain_sim_events()
-        return TeamState(self.to_m(self.sim.pos), np.zeros_like(self.sim.pos), ctx.state.fixed)
+        return TeamState(self.to_m(sim.pos), np.zeros_like(sim.pos), ctx.state.fixed)
 
     def _drain_sim_events(self) -> None:
         self._events.extend(self.sim.events)
@@ -117,7 +132,8 @@ class ExplorationRun(Strategy):
         }
 
     def robot_values(self) -> dict[str, np.ndarray]:
-        return {"connected": self.sim.connected.copy()}
+        # state: 0 moving, 1 relaying, 2 waiting, 3 returning, 4 failed (RobotState)
+        return {"connected": self.sim.connected.copy(), "state": self.states.copy()}
 
     def metrics(self) -> dict[str, Any]:
         return {
@@ -125,6 +141,12 @@ class ExplorationRun(Strategy):
             "out_of_comm_mean_steps": float(np.mean(self.out_steps)),
             "out_of_comm_max_steps": int(np.max(self.out_steps)),
             "out_of_comm_per_robot_steps": self.out_steps.tolist(),
+            **self.mission.summary(self.dt_s),
+            "robots_failed": int((~self.sim.alive).sum()),
+            "failures": [
+                {"robot": int(r), "step": int(self.sim.failed_at[r])}
+                for r in np.flatnonzero(~self.sim.alive)
+            ],
             **self.policy.metrics(),
             "timing_s": dict(self.sim.timing),
             "base_m": self.to_m(self.sim.base).tolist(),

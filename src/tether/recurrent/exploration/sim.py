@@ -16,6 +16,11 @@ robots with a depth sensor explore a 2-D occupancy map from a base station
 4. the policy (the BS planner of :mod:`tether.recurrent.replanning` or the
    Utility baseline of :mod:`tether.recurrent.baseline_utility`) reacts.
 
+Faults: ``ExplorationConfig.failures`` maps a robot to the step at which it
+fails (fail-stop): from that step on it stands still, senses nothing and has
+no link (what it knew and did not deliver is lost). :meth:`ExplorationSim.fail`
+does the same on demand. Policies read ``sim.alive``.
+
 The sim is a world model with no time loop or history of its own: the core
 loop (:func:`tether.sim.simulate`) steps it through the adapter of
 :mod:`tether.recurrent.exploration.run`, which records it like every run.
@@ -76,6 +81,7 @@ class ExplorationConfig:
     min_cluster_cells: int = 4
     max_cluster_extent: int = 30
     scan_steps: int = 1  # steps a full rotation takes
+    failures: dict[int, int] = field(default_factory=dict)  # robot -> step it fails at
 
 
 class ExplorationPolicy(Protocol):
@@ -178,6 +184,10 @@ class ExplorationSim:
         self.delivered = np.ones(n, dtype=bool)
         self.wait_until = np.zeros(n, dtype=int)  # no motion before this step
         self.scan_left = np.zeros(n, dtype=int)
+        self.alive = np.ones(n, dtype=bool)
+        self.failed_at = np.full(n, -1, dtype=int)  # step of the failure, -1 if alive
+        self.goal_at_failure = np.full((n, 2), np.nan)  # the goal it was heading to
+        self.moved = np.zeros(n, dtype=bool)  # advanced along its path in the last step
         self.knowledge = Knowledge(self.shape, n)
         self.connected = np.ones(n, dtype=bool)
         self.groups: list[list[int]] = [list(range(n))]
@@ -229,6 +239,17 @@ class ExplorationSim:
         self.assign(robot, self.pos[robot].copy(), GoalKind.NONE, self.pos[robot : robot + 1])
         self.at_goal[robot] = True
 
+    def fail(self, robot: int) -> None:
+        """Fail-stop ``robot`` now: it stops, senses nothing and drops its links for good."""
+        if not self.alive[robot]:
+            return
+        self.alive[robot] = False
+        self.failed_at[robot] = self.t
+        self.goal_at_failure[robot] = self.goal[robot]
+        self.stop(robot)
+        self.connected[robot] = False
+        self.log("failure", robot=int(robot))
+
     def known_by_bs(self) -> np.ndarray:
         return self.knowledge.global_known
 
@@ -257,7 +278,7 @@ class ExplorationSim:
         moved = np.zeros(self.n, dtype=bool)
         speed = self.cfg.speed_cells
         for r in range(self.n):
-            if self.at_goal[r] or self.t < self.wait_until[r]:
+            if self.at_goal[r] or self.t < self.wait_until[r] or not self.alive[r]:
                 continue
             path = self.paths[r]
             budget = speed
@@ -286,7 +307,7 @@ class ExplorationSim:
         return moved
 
     def _sense(self, moved: np.ndarray) -> None:
-        scanning = self.scan_left > 0
+        scanning = (self.scan_left > 0) & self.alive
         who = np.flatnonzero(moved | scanning)
         if len(who) == 0:
             return
@@ -301,6 +322,9 @@ class ExplorationSim:
     def _communicate(self) -> None:
         nodes = np.vstack([self.base[None], self.pos])
         pairs = link_pairs(self.link, ~self.occupied, nodes)
+        if not self.alive.all():  # failed robots have no link
+            dead = np.flatnonzero(~self.alive) + 1
+            pairs = pairs[~np.isin(pairs, dead).any(axis=1)]
         _, lab = components(len(nodes), pairs)
         self.connected = lab[1:] == lab[0]
         groups: dict[int, list[int]] = {}
@@ -321,8 +345,12 @@ class ExplorationSim:
     def step(self) -> None:
         """Advance by one step: move, sense, communicate, then the policy decides."""
         self.t += 1
+        for r, step in self.cfg.failures.items():
+            if step == self.t:
+                self.fail(int(r))
         tic = time.perf_counter()
         moved = self._move()
+        self.moved = moved
         t1 = time.perf_counter()
         self._sense(moved)
         t2 = time.perf_counter()

@@ -80,6 +80,12 @@ class Configuration:
         Theorem 4.1 bound ``(k/delta) U(F^delta-BEST)``).
     fixed
         The non-ready goals that were treated as relays.
+    timed_out
+        The ILP's time budget ran out before optimality was proven: the
+        configuration is the best one found (``proven_optimal`` is false).
+    fallback
+        True when that best configuration is the APX one (Algorithm 1, the
+        solver found nothing better within the budget).
     """
 
     vertices: frozenset
@@ -90,6 +96,8 @@ class Configuration:
     proven_optimal: bool
     upper_bound: float = float("inf")
     fixed: frozenset = field(default_factory=frozenset)
+    timed_out: bool = False
+    fallback: bool = False
 
     @property
     def occupied(self) -> frozenset:
@@ -130,8 +138,12 @@ def optimal_configuration(
     backend
         ILP solver: ``"scip"`` (constraint handler) or ``"highs"`` (cut loop).
     time_limit_s
-        Optional ILP time limit; on timeout the best solution found is
-        returned with ``proven_optimal=False``.
+        Optional time budget of an ``"ilp"`` plan, counted from the call (graph
+        transformation, reductions and the solver). When it runs out the best
+        configuration found is returned with ``proven_optimal=False`` and
+        ``timed_out=True``; that is never worse than APX (``delta``), which is
+        computed first and returned (``fallback=True``) if the solver found
+        nothing better.
 
     Returns
     -------
@@ -139,6 +151,7 @@ def optimal_configuration(
     """
     t0 = time.perf_counter()
     problem = _problem.build(graph, base, utilities, budget, fixed)
+    timed_out = fallback = False
     if method == "apx":
         if int(delta) != delta or delta < 1:
             raise ValueError(f"delta must be a positive integer (got {delta!r})")
@@ -151,7 +164,11 @@ def optimal_configuration(
             "apx",
         )
     elif method == "ilp":
-        res = solve_ilp(problem, backend=backend, time_limit_s=time_limit_s)
+        apx = None
+        if time_limit_s is not None:  # the fallback, computed first
+            apx = solve_apx(problem, int(delta))
+        left = None if time_limit_s is None else time_limit_s - (time.perf_counter() - t0)
+        res = solve_ilp(problem, backend=backend, time_limit_s=left)
         verts, util, proven, upper, name = (
             res.vertices,
             res.utility,
@@ -159,6 +176,12 @@ def optimal_configuration(
             res.upper_bound,
             f"ilp-{backend}",
         )
+        timed_out = not proven and time_limit_s is not None
+        if apx is not None and timed_out:
+            if apx.utility > util + 1e-12:
+                verts, util = apx.vertices, apx.utility
+            # nothing better than APX (or than the solver's APX incumbent) was found
+            fallback = util <= max(apx.utility, res.stats.get("incumbent_utility", 0.0)) + 1e-12
     else:
         raise ValueError(f"unknown method {method!r}; expected 'apx' or 'ilp'")
     chosen = problem.to_labels(verts)
@@ -171,6 +194,8 @@ def optimal_configuration(
         proven_optimal=proven,
         upper_bound=max(upper, util),
         fixed=problem.fixed,
+        timed_out=timed_out,
+        fallback=fallback,
     )
 
 

@@ -83,12 +83,31 @@ def _decode(model: DirectedCutModel, values: np.ndarray) -> set[int]:
 def solve_ilp(
     problem: Problem, backend: str = "scip", time_limit_s: float | None = None
 ) -> IlpResult:
-    """Solve eqs. (2)-(4) to proven optimality (see the module docstring)."""
+    """Solve eqs. (2)-(4) to proven optimality (see the module docstring).
+
+    ``time_limit_s`` bounds the whole call (reductions, incumbent and solver):
+    when it runs out, the best solution found is returned with
+    ``proven_optimal=False`` (at worst the APX incumbent). The phases before the
+    solver are not interrupted; the budget is checked between them, and a call
+    out of time before the solver returns no solution (``{0}``, the caller's
+    APX fallback takes over).
+    """
     t0 = time.perf_counter()
     if problem.budget == 0 or not np.any(problem.utility > 0):
         return IlpResult({0}, 0.0, True, 0.0, {})
+    if time_limit_s is not None and time_limit_s <= 0:
+        return IlpResult({0}, 0.0, False, float("inf"), {"solver_skipped": True})
+
+    def out_of_time() -> bool:
+        return time_limit_s is not None and time.perf_counter() - t0 >= time_limit_s
+
+    skipped = IlpResult({0}, 0.0, False, float("inf"), {"solver_skipped": True})
     keep = reduce_dominated(problem)
+    if out_of_time():  # the phases before the solver are not interrupted, but checked
+        return skipped
     model = DirectedCutModel(problem, keep)
+    if out_of_time():
+        return skipped
     if CONFLICT_SIZE >= 2:
         model.conflicts = frontier_conflicts(problem, keep, CONFLICT_SIZE)
     hint = _incumbent(problem, keep)
@@ -104,8 +123,18 @@ def solve_ilp(
         from tether.recurrent.planning.ilp_highs import solve_highs as run
     else:
         raise ValueError(f"unknown ILP backend {backend!r}; expected 'scip' or 'highs'")
-    values, proven, bound, more = run(model, hint, time_limit_s)
+    # the time limit is the budget of the whole call: what the reductions and the
+    # incumbent took is no longer available to the solver
+    left = None if time_limit_s is None else time_limit_s - (time.perf_counter() - t0)
+    if left is not None and left <= 0:  # out of time already: the incumbent
+        values = np.zeros(model.n_cols) if hint is None else model.solution_vector(*hint)
+        proven, bound, more = False, float("inf"), {"solver_skipped": True}
+    else:
+        values, proven, bound, more = run(model, hint, left)
     stats.update(more)
+    stats["incumbent_utility"] = (
+        0.0 if hint is None else float(problem.utility[list(hint[0])].sum())
+    )
     local = _decode(model, values)
     verts = {int(keep[v]) for v in local}
     utility = float(problem.utility[list(verts)].sum())

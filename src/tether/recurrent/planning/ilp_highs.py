@@ -82,8 +82,10 @@ def solve_highs(
         return None if deadline is None else max(deadline - time.perf_counter(), 0.0)
 
     for _ in range(LP_ROUNDS):  # LP phase
-        if deadline is not None and remaining() <= 0:
-            break
+        if deadline is not None:
+            if remaining() <= 0:
+                break
+            h.setOptionValue("time_limit", remaining())
         h.run()
         lp_rounds += 1
         x = np.asarray(h.getSolution().col_value)

@@ -13,6 +13,10 @@ if the goal is a frontier) and (b) for every ``f`` whose ``P_f`` holds ``j``'s
 goal, ``f``'s data reached the BS and every robot on ``P_f`` is at its goal.
 Ready robots are connected to the BS by definition (the BS must be able to
 send them a plan), so readiness also requires a current link to the BS.
+
+Which robots get a ``P_f`` is :func:`binding_targets`: the paper's rule (its
+frontiers and fake frontiers) or, the planner's default, every robot the plan
+sends somewhere (``docs/recurrent.md`` explains the deviation).
 """
 
 from __future__ import annotations
@@ -22,7 +26,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Obligation", "ReadinessTracker", "relay_paths"]
+__all__ = ["Obligation", "ReadinessTracker", "binding_targets", "relay_paths"]
+
+#: which robots of a plan get a relay path ``P_f`` (see :func:`binding_targets`)
+BINDINGS = ("assigned", "frontiers")
 
 
 def _bfs_path(adj: dict[int, list[int]], allowed: set[int], src: int, dst: int) -> list[int] | None:
@@ -93,6 +100,30 @@ def relay_paths(
     return out
 
 
+def binding_targets(
+    assignment: dict[int, int], frontier_like: set[int], rule: str = "assigned"
+) -> list[int]:
+    """Robots of a plan whose goal gets a relay path ``P_f``.
+
+    ``assignment`` maps robots to the goal vertices of the deployment;
+    ``frontier_like`` are the plan's frontiers and fake frontiers (Sec. V).
+
+    ``"frontiers"`` is the paper's rule (Sec. VI): ``P_f`` for every frontier and
+    fake frontier of the plan. ``"assigned"`` binds a ``P_f`` for every robot of
+    the assignment: a relay is then also held until the chain linking its own goal
+    to the BS has formed. Without it, a relay that arrives before the robots that
+    would link it can be ready, re-planned and gone when they arrive, and they
+    stand disconnected for good: the configuration of later plans treats the
+    goals of non-ready robots as connected to the BS (Sec. IV-A), which only the
+    ``P_f`` of their own plan guarantees.
+    """
+    if rule not in BINDINGS:
+        raise ValueError(f"relay binding must be one of {BINDINGS} (got {rule!r})")
+    if rule == "assigned":
+        return list(assignment)
+    return [r for r, v in assignment.items() if v in frontier_like]
+
+
 @dataclass
 class Obligation:
     """The robots on ``members`` relay until ``target``'s data is at the BS.
@@ -120,12 +151,21 @@ class ReadinessTracker:
         self.obligations.append(Obligation(int(target), frozenset(members) | {int(target)}, plan))
 
     def branch(self, robot: int, goal_keys: np.ndarray) -> set[int]:
-        """Robots sharing an outstanding obligation with ``robot`` (its plan branches)."""
-        key = int(goal_keys[robot])
-        locs = {key}
-        for o in self.obligations:
-            if key in o.members:
-                locs |= o.members
+        """Robots of the branches ``robot`` belongs to (Sec. VII-B), transitively.
+
+        The robots sharing an outstanding obligation with ``robot``; preempting
+        them breaks every other obligation they hold too (a relay shared by two
+        branches), so the robots of those join, until no obligation is left
+        half-preempted.
+        """
+        locs = {int(goal_keys[robot])}
+        grew = True
+        while grew:
+            grew = False
+            for o in self.obligations:
+                if o.members & locs and not o.members <= locs:
+                    locs |= o.members
+                    grew = True
         return {r for r in range(len(goal_keys)) if int(goal_keys[r]) in locs} | {robot}
 
     def drop(self, locations: set[int]) -> None:
