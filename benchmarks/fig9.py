@@ -63,14 +63,29 @@ def load_rows(out: Path, sizes: list[int], seeds: int) -> list[dict]:
     return [r for r in rows if r["param:team.n_robots"] in sizes and r["seed"] < seeds]
 
 
+def failure(row: dict) -> str:
+    """Why a trial fails the completeness check (empty if it passes): every target
+    reached, the weighted lambda2 above lambda2_min = 0 at every step, no collision."""
+    why = []
+    if row["targets_reached"] != row["targets_total"]:
+        why.append(f"{row['targets_reached']}/{row['targets_total']} targets "
+                   f"({row['targets_dropped']} dropped)")  # fmt: skip
+    if not row["min_lambda2_weighted"] > 0.0:
+        why.append(f"min weighted lambda2 {row['min_lambda2_weighted']}")
+    if row["collisions"]:
+        why.append(f"{row['collisions']} collisions")
+    return "; ".join(why)
+
+
 def summarise(rows: list[dict], sizes: list[int]) -> dict:
     out: dict = {"trials": len(rows)}
-    complete = [r["targets_reached"] == r["targets_total"] for r in rows]
-    out["complete_share"] = float(np.mean(complete)) if rows else None
-    out["incomplete_trials"] = [
-        {"n_robots": r["param:team.n_robots"], "seed": r["seed"],
-         "reached": r["targets_reached"], "dropped": r["targets_dropped"]}
-        for r, ok in zip(rows, complete, strict=True) if not ok
+    failed = [failure(r) for r in rows]
+    out["complete_share"] = float(np.mean([not f for f in failed])) if rows else None
+    out["min_lambda2_weighted"] = min((r["min_lambda2_weighted"] for r in rows), default=None)
+    out["collisions"] = int(sum(r["collisions"] for r in rows))
+    out["failed_trials"] = [
+        {"n_robots": r["param:team.n_robots"], "seed": r["seed"], "why": f}
+        for r, f in zip(rows, failed, strict=True) if f
     ]  # fmt: skip
     n = np.array([r["param:team.n_robots"] for r in rows])
     for key, _ in METRICS:
@@ -135,6 +150,8 @@ def main() -> None:
     a = ap.parse_args()
     result: dict = {"machine": machine(), "seeds": a.seeds, "sizes": a.sizes, "scenes": {},
                     "wall_time_s": {}}  # fmt: skip
+    if a.no_run and a.out.exists():  # keep the wall times of the run that made the trials
+        result["wall_time_s"] = json.loads(a.out.read_text()).get("wall_time_s", {})
     for scene in a.scenes:
         out = a.runs / scene
         if not a.no_run:
