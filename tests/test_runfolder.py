@@ -66,7 +66,7 @@ def test_a_failure_at_any_write_leaves_the_previous_run_untouched(tmp_path, monk
             real(path, write)
 
         monkeypatch.setattr(runfolder, "atomic_write", failing)
-        with pytest.raises(OSError, match=f"write {k}"):
+        with pytest.raises(OutputError, match=rf"run folder \(disk full at write {k}\)"):
             run(tiny(), out_dir=out, seed=3)
         monkeypatch.setattr(runfolder, "atomic_write", real)
         assert files_of(out) == before, f"failure at write {k} changed the committed run"
@@ -74,7 +74,7 @@ def test_a_failure_at_any_write_leaves_the_previous_run_untouched(tmp_path, monk
         fresh = tmp_path / f"fresh{k}"
         monkeypatch.setattr(runfolder, "atomic_write", failing)
         calls["n"] = 0
-        with pytest.raises(OSError):
+        with pytest.raises(OutputError):
             run(tiny(), out_dir=fresh, seed=3)
         monkeypatch.setattr(runfolder, "atomic_write", real)
         assert not fresh.exists()  # no folder without summary.json, and none with it
