@@ -153,6 +153,20 @@ def sweep(
 
 
 @app.command()
+def report(
+    sweep_dir: Annotated[Path, typer.Argument(help="A sweep folder written by `tether sweep`.")],
+) -> None:
+    """Write a Markdown report of a sweep: figures with percentile bands and statistics.
+
+    Writes SWEEP_DIR/report.md and SWEEP_DIR/figures/. Example: tether report runs/fig5
+    """
+    from tether.experiments.report import write_report
+
+    path = write_report(sweep_dir, command=f"tether report {sweep_dir}")
+    out.print(f"report: {path}", markup=False, highlight=False, soft_wrap=True)
+
+
+@app.command()
 def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
     """Check a scenario (schema, strategy parameters, map, initial team, memory) without running.
 
