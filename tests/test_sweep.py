@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -91,23 +90,13 @@ def test_resume_reuses_finished_trials(tmp_path):
     assert (redo / "summary.json").exists()
 
 
-def test_a_failing_trial_keeps_the_others(tmp_path):
-    # the demo team starts 8 m apart: with a 3 m range it is not connected -> that trial fails
+def test_a_combination_that_cannot_start_is_refused_before_any_trial(tmp_path):
+    """validate == sweep: a 3 m range cannot connect the demo team (8 m apart) -> one line."""
     scenario = _scenario({"sensing.range_m": [15.0, 3.0]})
     with pytest.raises(TetherError, match="not connected") as err:
-        run_sweep(scenario, tmp_path, seeds=2, executor="processes", workers=2)
-    assert "sweep.parquet" in str(err.value)
-    rows = pq.read_table(tmp_path / "sweep.parquet").to_pylist()
-    finished = [r for r in rows if r["error"] is None]
-    assert sorted(r["param:sensing.range_m"] for r in finished) == [15.0, 15.0]
-    for r in finished:
-        summary = json.loads((Path(r["run_dir"]) / "summary.json").read_text())
-        assert summary["connected_all_steps"] is True
-    # the failed trials are in the table too, with their seed and error, and no folder
-    failed = [r for r in rows if r["error"] is not None]
-    assert sorted((r["param:sensing.range_m"], r["seed"]) for r in failed) == [(3.0, 1), (3.0, 2)]
-    assert all("not connected" in r["error"] for r in failed)
-    assert not any(Path(r["run_dir"]).exists() for r in failed)
+        run_sweep(scenario, tmp_path / "out", seeds=2, executor="processes", workers=2)
+    assert "sweep: combination range_m=3.0 (seed 1) is refused" in str(err.value)
+    assert not (tmp_path / "out").exists()  # nothing run, nothing written
 
 
 def test_cli_sweep_with_processes(tmp_path):

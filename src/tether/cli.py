@@ -108,10 +108,13 @@ def sweep(
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Sweep folder.")] = Path(
         "runs/sweep"
     ),
-    seeds: Annotated[int, typer.Option(min=1, help="Seeds per parameter combination.")] = 1,
+    seeds: Annotated[
+        int | None,
+        typer.Option(min=1, help="Seeds per combination (default: the sweep block's, else 1)."),
+    ] = None,
     executor: Annotated[
-        str, typer.Option(help="Where trials run: serial, processes or dask.")
-    ] = "serial",
+        str, typer.Option(help="Where trials run: processes (all cores), serial or dask.")
+    ] = "processes",
     workers: Annotated[
         int | None,
         typer.Option(min=1, help="Processes (processes, local dask); default: all cores."),
@@ -121,11 +124,11 @@ def sweep(
     ] = None,
     set_: SetOpt = None,
 ) -> None:
-    """Run the scenario's `sweep:` grid x seeds (resumable) and write a comparison table.
+    """Run the scenario's `sweep:` combinations x seeds (resumable) into one table of trials.
 
     Example: tether sweep scenarios/silent_paper.yaml --out runs/fig5 --seeds 20
-    --executor processes
     """
+    from tether.experiments.progress import progress_for
     from tether.experiments.sweep import run_sweep
 
     sc = _load(scenario, set_)
@@ -136,7 +139,9 @@ def sweep(
         executor=executor,
         workers=workers,
         address=address,
-        progress=lambda m: out.print(m, markup=False, highlight=False, soft_wrap=True),
+        progress=progress_for(
+            out, lambda m: out.print(m, markup=False, highlight=False, soft_wrap=True)
+        ),
     )
     out.print(
         f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}",
@@ -148,20 +153,38 @@ def sweep(
 
 
 @app.command()
+def report(
+    sweep_dir: Annotated[Path, typer.Argument(help="A sweep folder written by `tether sweep`.")],
+) -> None:
+    """Write a Markdown report of a sweep: figures with percentile bands and statistics.
+
+    Writes SWEEP_DIR/report.md and SWEEP_DIR/figures/. Example: tether report runs/fig5
+    """
+    from tether.experiments.report import write_report
+
+    path = write_report(sweep_dir, command=f"tether report {sweep_dir}")
+    out.print(f"report: {path}", markup=False, highlight=False, soft_wrap=True)
+
+
+@app.command()
 def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
     """Check a scenario (schema, strategy parameters, map, initial team, memory) without running.
 
     Runs exactly the checks `tether run` runs before simulating (tether.runner.build),
-    so a scenario that validates is one that runs.
+    and builds every combination of the `sweep:` block as `tether sweep` does, so a
+    scenario that validates is one that runs.
     """
+    from tether.experiments.plan import check_combinations
     from tether.runfolder import check_writable
     from tether.runner import build
 
     sc = _load(scenario, set_)
     build(sc)
+    n_combos = check_combinations(sc)  # every combination of the sweep block builds
     check_writable(sc.output.dir)  # where `tether run` would write (without --out)
+    swept = f", sweep of {n_combos} combinations" if n_combos else ""
     out.print(
-        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots)",
+        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept})",
         markup=False,
         highlight=False,
     )

@@ -26,6 +26,8 @@ from pydantic import (
 )
 
 from tether.errors import ScenarioError
+from tether.sweepspec import MAX_SWEEP_COMBINATIONS as MAX_SWEEP_COMBINATIONS  # re-exported
+from tether.sweepspec import SweepError, SweepSpec, parse_sweep
 
 BUILTIN_PACKAGE = "tether.scenarios"
 
@@ -38,8 +40,7 @@ MAX_DT_S = 86_400.0
 MAX_ROBOTS = 1_000_000
 MAX_STEPS = 100_000_000
 MAX_SEED = 2**63 - 1
-#: a sweep grid holds at most this many combinations, a sweep at most this many trials
-MAX_SWEEP_COMBINATIONS = 10_000
+#: a sweep holds at most this many trials (its grid at most MAX_SWEEP_COMBINATIONS combinations)
 MAX_SWEEP_TRIALS = 100_000
 #: a run folder name part longer than this (bytes) is shortened and given a hash
 MAX_LABEL_BYTES = 80
@@ -143,11 +144,10 @@ class Scenario(_Strict):
     sim: SimConfig = Field(default_factory=SimConfig)
     strategy: StrategyConfig
     output: OutputConfig = Field(default_factory=OutputConfig)
-    sweep: dict[Annotated[str, Field(min_length=1)], Annotated[list[Any], Field(min_length=1)]] = (
-        Field(
-            default_factory=dict,
-            description="dotted scenario key -> values, run by `tether sweep` (grid of all values)",
-        )
+    sweep: dict[str, Any] = Field(
+        default_factory=dict,
+        description="axes (dotted scenario key -> values or range), zip groups and seeds, run by "
+        "`tether sweep` (grammar: tether.sweepspec)",
     )
 
     @field_validator("name")
@@ -362,7 +362,22 @@ def scenario_from_dict(
         raise ScenarioError(format_validation_error(source, exc)) from None
     scenario._source = source
     scenario._base_dir = base_dir if base_dir is not None else Path(".")
+    sweep_spec(scenario)  # a malformed sweep block is refused with the scenario
     return scenario
+
+
+def sweep_spec(scenario: Scenario) -> SweepSpec:
+    """The parsed ``sweep:`` block of a scenario (:mod:`tether.sweepspec`).
+
+    Raises
+    ------
+    ScenarioError
+        ``<file>: sweep.<field>: <problem and fix>`` for a malformed block.
+    """
+    try:
+        return parse_sweep(scenario.sweep)
+    except SweepError as exc:
+        raise ScenarioError(" ".join(f"{scenario.source}: {exc}".split())) from None
 
 
 def apply_overrides(data: dict[str, Any], overrides: list[str], source: str) -> dict[str, Any]:

@@ -12,7 +12,6 @@ from __future__ import annotations
 import copy
 import datetime as dt
 import inspect
-import math
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -23,14 +22,13 @@ from pydantic import ValidationError
 
 from tether.config import (
     MAX_SEED,
-    MAX_SWEEP_COMBINATIONS,
     InitConfig,
     Scenario,
     format_validation_error,
     load_scenario,
     scenario_from_dict,
     set_dotted,
-    sweep_label,
+    sweep_spec,
 )
 from tether.errors import MapError, OutputError, ScenarioError, TetherError
 from tether.graph import is_connected
@@ -41,6 +39,7 @@ from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
 from tether.sensing import SensorModel, sensed_pairs
 from tether.sim import Strategy, TeamState, simulate
+from tether.sweepspec import canonical, value_key
 from tether.team import initial_positions
 from tether.viz.plots import link_range_m, links_over_time, team_snapshot
 from tether.world.scenes import make_scene
@@ -157,49 +156,75 @@ def check_seed(seed: Any) -> int | None:
     return int(seed)
 
 
-def check_sweep(scenario: Scenario, cls: type[Strategy]) -> None:
-    """Every value of every ``sweep:`` axis gives a valid scenario and its own run folder.
+def check_sweep(scenario: Scenario, cls: type[Strategy]) -> dict[str, list[Any]]:
+    """Every row of every ``sweep:`` group gives a valid scenario; the axes, normalised.
 
-    Checked value by value (linear in the number of values, not the grid): the
-    axis must name a scenario key (for ``strategy.params.*`` a parameter of the
-    strategy, for ``world.params.*`` one of the scene), each value must pass
-    validation, and two values of one axis must not map to one run folder
-    (``15.0`` and ``'15.0'``). The grid is at most ``MAX_SWEEP_COMBINATIONS``.
+    Checked row by row (linear in the number of values, not the grid; the axes of a
+    ``zip`` group together): the axis must name a scenario key (for
+    ``strategy.params.*`` a parameter of the strategy, for ``world.params.*`` one of
+    the scene) and each value must pass validation. Values are normalised to what
+    validation made of them (``'15.0'`` -> ``15.0`` for a float field; see
+    :func:`tether.sweepspec.canonical` elsewhere), and two rows that normalise alike
+    are refused (they would be one trial twice).
+
+    Returns
+    -------
+    dict of str to list
+        The axes in file order with their normalised values.
     """
-    if not scenario.sweep:
-        return
+    spec = sweep_spec(scenario)
+    if not spec.axes:
+        return {}
     src = scenario.source
-    n = math.prod(len(v) for v in scenario.sweep.values())
-    if n > MAX_SWEEP_COMBINATIONS:
-        raise ScenarioError(
-            f"{src}: sweep: the grid has {n:,} combinations; at most "
-            f"{MAX_SWEEP_COMBINATIONS:,} (sweep fewer values, or split the sweep)"
-        )
     base = scenario.model_dump(mode="json")
     base.pop("sweep", None)
-    for key, values in scenario.sweep.items():
-        field = f"sweep.{key}"
-        labels: dict[str, Any] = {}
-        for value in values:
+    normal: dict[str, list[Any]] = {key: [] for key in spec.axes}
+    for group in spec.groups:
+        field = f"sweep.{group[0]}"
+        seen: dict[str, Any] = {}
+        for row in spec.group_rows(group):
             data = copy.deepcopy(base)
-            set_dotted(data, key, value)
+            for key, value in row.items():
+                set_dotted(data, key, value)
+            shown = _short(row[group[0]] if len(group) == 1 else row)
             try:
                 trial = scenario_from_dict(data, "", scenario.base_dir)
-                trial_cls = strategy_class(trial) if key.startswith("strategy.") else cls
-                strategy_params(trial, trial_cls)
-                _check_scene_parameter(trial, key)
+                trial_cls = strategy_class(trial) if data["strategy"] != base["strategy"] else cls
+                params = strategy_params(trial, trial_cls)
+                for key in group:
+                    _check_scene_parameter(trial, key)
             except ScenarioError as exc:
                 problem = str(exc).removeprefix(": ")
                 raise ScenarioError(
-                    f"{src}: {field}: value {_short(value)} is refused ({problem})"
+                    f"{src}: {field}: value {shown} is refused ({problem})"
                 ) from None
-            label = sweep_label({key: value})
-            if label in labels:
+            values = {key: _normalised(trial, params, key, row[key]) for key in group}
+            text = value_key(values)
+            if text in seen:
                 raise ScenarioError(
-                    f"{src}: {field}: values {_short(labels[label])} and {_short(value)} give "
-                    f"the same run folder {label!r}; remove one"
+                    f"{src}: {field}: values {_short(seen[text])} and {shown} are one value "
+                    "(the same trial twice); remove one"
                 )
-            labels[label] = value
+            seen[text] = row[group[0]] if len(group) == 1 else row
+            for key, value in values.items():
+                normal[key].append(value)
+    return normal
+
+
+def _normalised(trial: Scenario, params: Any, key: str, value: Any) -> Any:
+    """The value of ``key`` as validation made it (``'15.0'`` -> ``15.0``), else canonical."""
+    if key.startswith("strategy.params.") and hasattr(params, "model_dump"):
+        node: Any = params.model_dump(mode="json")
+        parts = key.split(".")[2:]
+    elif key.startswith(("strategy.params.", "world.params.")):
+        return canonical(value)
+    else:
+        node, parts = trial.model_dump(mode="json"), key.split(".")
+    for part in parts:
+        if not isinstance(node, dict) or part not in node:
+            return canonical(value)
+        node = node[part]
+    return node
 
 
 def _short(value: Any, limit: int = 40) -> str:

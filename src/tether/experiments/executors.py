@@ -121,7 +121,7 @@ def _dask(trials: list[Trial], workers: int, address: str | None) -> Iterator[Tr
     cluster = None
     if address is None:  # a local cluster of processes, started and stopped here
         cluster = LocalCluster(
-            n_workers=max(1, workers), threads_per_worker=1, processes=True, dashboard_address=None
+            n_workers=max(1, workers), threads_per_worker=1, processes=True, dashboard_address=":0"
         )
     try:
         try:

@@ -1,15 +1,15 @@
-"""Parameter grids x seeds over one scenario, resumable, with a comparison table.
+"""Sweeps: the ``sweep:`` block's combinations x seeds, resumable, with one table of trials.
 
-Each trial writes its own run folder ``<out>/<combo>/seed-<k>/``; a trial whose
-``summary.json`` exists is not run again, so a killed sweep resumes where it
-stopped without losing or redoing work (run folders are committed whole).
+Each trial writes its own run folder ``<out>/<combo>/seed-<s>/`` (see
+:mod:`tether.experiments.plan` for the ids); a trial whose ``summary.json`` exists is
+not run again, so a killed sweep resumes where it stopped without losing or redoing
+work (run folders are committed whole). The folder is a store
+(:mod:`tether.experiments.store`): a changed scenario is refused, never mixed in.
 """
 
 from __future__ import annotations
 
-import itertools
 import json
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,27 +18,37 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 
-from tether.config import (
-    MAX_SEED,
-    MAX_SWEEP_TRIALS,
-    Scenario,
-    scenario_from_dict,
-    set_dotted,
-    sweep_label,
-)
+from tether.config import Scenario, sweep_label
 from tether.errors import OutputError, TetherError
 from tether.experiments.executors import Trial, TrialOutcome, check_executor, execute
-from tether.runfolder import is_run_folder, save_figure, write_rows, write_yaml
-from tether.runner import check_sweep, strategy_class
+from tether.experiments.plan import check_combinations, trial_id, trial_scenario, trials_of
+from tether.experiments.progress import LineProgress, TrialProgress
+from tether.experiments.store import SWEEP_SCENARIO, SWEEP_TABLE, open_store
+from tether.runfolder import save_figure, write_rows
 from tether.viz.plots import TIME_LABEL, links_over_time, series_over_time
 
-#: the scenario of a sweep, written first into its folder (marks the folder as a sweep's)
-SWEEP_SCENARIO = "sweep.yaml"
-SWEEP_TABLE = "sweep.parquet"
+__all__ = [
+    "SWEEP_SCENARIO",
+    "SWEEP_TABLE",
+    "SweepResult",
+    "TrialsFailed",
+    "TrialsOutcome",
+    "prepare_sweep_folder",
+    "run_sweep",
+    "run_trials",
+    "sweep_figures",
+    "trial_scenario",
+    "trials_of",
+]
+
+#: kept for callers of the first sweep API: the store opens (or refuses) the folder
+prepare_sweep_folder = open_store
 
 
 @dataclass
 class SweepResult:
+    """What a sweep did: its table, trials finished (now or before), reused, figures, failed."""
+
     table: Path
     n_runs: int
     n_skipped: int
@@ -58,56 +68,6 @@ class TrialsFailed(RuntimeError):
         self.details = details
 
 
-def combinations(sweep: dict[str, list[Any]]) -> list[dict[str, Any]]:
-    """All combinations of the sweep grid, in a stable order (one empty dict if no grid)."""
-    keys = list(sweep)
-    return [dict(zip(keys, values, strict=True)) for values in itertools.product(*sweep.values())]
-
-
-def combo_label(combo: dict[str, Any]) -> str:
-    """The folder name of a combination (see :func:`tether.config.sweep_label`)."""
-    return sweep_label(combo)
-
-
-def trial_scenario(base: Scenario, combo: dict[str, Any]) -> Scenario:
-    data = base.model_dump(mode="json")
-    data.pop("sweep", None)
-    for key, value in combo.items():
-        set_dotted(data, key, value)
-    return scenario_from_dict(data, f"{base.source} [{combo_label(combo)}]", base.base_dir)
-
-
-def trials_of(
-    scenario: Scenario, out_dir: str | Path, seeds: int = 1
-) -> list[tuple[dict[str, Any], Trial]]:
-    """The sweep's trials, each with its grid combination, in a stable order (combos x seeds)."""
-    if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
-        raise ValueError(f"seeds must be a positive integer (got {seeds!r})")
-    n_combos = math.prod(len(v) for v in scenario.sweep.values())
-    if n_combos * seeds > MAX_SWEEP_TRIALS:
-        raise TetherError(
-            f"{scenario.source}: sweep: {n_combos:,} combinations x {seeds:,} seeds = "
-            f"{n_combos * seeds:,} trials; at most {MAX_SWEEP_TRIALS:,} (use fewer seeds or values)"
-        )
-    if scenario.seed + seeds - 1 > MAX_SEED:
-        raise TetherError(
-            f"{scenario.source}: seed: {scenario.seed} + {seeds} seeds passes 2**63 - 1; "
-            "use a smaller seed"
-        )
-    out = Path(out_dir)
-    trials = []
-    for combo in combinations(scenario.sweep):
-        trial = trial_scenario(scenario, combo)
-        data = trial.model_dump(mode="json")
-        for k in range(seeds):
-            seed = scenario.seed + k
-            run_dir = out / combo_label(combo) / f"seed-{seed}"
-            trials.append(
-                (combo, Trial(data, trial.source, str(trial.base_dir), seed, str(run_dir)))
-            )
-    return trials
-
-
 @dataclass
 class TrialsOutcome:
     """Summaries of the finished trials by run folder, failures as one line each."""
@@ -124,7 +84,7 @@ def run_trials(
     executor: str = "serial",
     workers: int | None = None,
     address: str | None = None,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[[str], None] | TrialProgress | None = None,
 ) -> TrialsOutcome:
     """Run the trials whose run folder has no ``summary.json`` yet; reuse the others.
 
@@ -132,7 +92,8 @@ def run_trials(
     a folder with ``summary.json`` is a finished trial: a killed sweep resumes
     without losing or redoing work. A trial that fails in any way is recorded
     (``errors``, one line each with its seed; ``failures`` by run folder) and
-    the others go on.
+    the others go on. ``progress`` is a :class:`TrialProgress` or a callable
+    given one line per trial.
     """
     summaries: dict[str, dict[str, Any]] = {}
     todo = []
@@ -140,115 +101,104 @@ def run_trials(
         summary_file = Path(trial.run_dir) / "summary.json"
         try:
             summaries[trial.run_dir] = json.loads(summary_file.read_text())
-        except FileNotFoundError:
+        except (OSError, ValueError):  # missing, unreadable or damaged: run the trial
             todo.append(trial)
-        except (OSError, ValueError):  # unreadable or damaged: run the trial again
-            todo.append(trial)
+    reporter = LineProgress(progress) if callable(progress) else progress
     errors: list[str] = []
     failures: dict[str, TrialOutcome] = {}
-    for k, outcome in enumerate(execute(todo, executor, workers=workers, address=address), 1):
-        run_dir = outcome.trial.run_dir
-        if outcome.summary is None:
-            errors.append(f"{run_dir} (seed {outcome.trial.seed}): {outcome.error}")
-            failures[run_dir] = outcome
-        else:
-            summaries[run_dir] = outcome.summary
-        if progress:
-            status = f"failed: {outcome.error}" if outcome.summary is None else "done"
-            progress(f"[{k}/{len(todo)}] {run_dir} {status}")
+    if reporter is not None:
+        reporter.start(len(todo), len(trials) - len(todo))
+    try:
+        for outcome in execute(todo, executor, workers=workers, address=address):
+            run_dir = outcome.trial.run_dir
+            if outcome.summary is None:
+                errors.append(f"{run_dir} (seed {outcome.trial.seed}): {outcome.error}")
+                failures[run_dir] = outcome
+            else:
+                summaries[run_dir] = outcome.summary
+            if reporter is not None:
+                reporter.advance(outcome, len(summaries) - (len(trials) - len(todo)), len(errors))
+    finally:
+        if reporter is not None:
+            reporter.stop()
     return TrialsOutcome(summaries, errors, len(trials) - len(todo), failures)
 
 
-def prepare_sweep_folder(scenario: Scenario, out_dir: str | Path) -> Path:
-    """Create ``out_dir`` for a sweep (or reuse a sweep's), and write the swept scenario.
-
-    Refused with :class:`OutputError`: a file, a non-empty folder that is not a
-    sweep's (so ``--out .`` never mixes a sweep into other files), a place that
-    cannot be created or written.
-    """
-    out = Path(out_dir)
-    try:
-        if out.exists() and not out.is_dir():
-            raise OutputError(f"{out}: exists and is not a folder; choose another --out")
-        if out.is_dir() and any(out.iterdir()) and not _is_sweep_folder(out):
-            raise OutputError(
-                f"{out}: folder is not empty and not a tether sweep folder; choose a new or "
-                "empty folder for --out (a sweep resumes only in its own folder)"
-            )
-        out.mkdir(parents=True, exist_ok=True)
-        write_yaml(out / SWEEP_SCENARIO, scenario.model_dump(mode="json"))
-    except OSError as exc:
-        raise OutputError(
-            f"{out}: cannot write the sweep folder ({exc.strerror or exc}); choose a writable --out"
-        ) from None
-    return out
-
-
-def _is_sweep_folder(out: Path) -> bool:
-    if (out / SWEEP_SCENARIO).is_file() or (out / SWEEP_TABLE).is_file():
-        return True
-    return any(
-        is_run_folder(run) for combo in out.iterdir() if combo.is_dir()
-        for run in combo.glob("seed-*")
-    )  # fmt: skip
+def trial_rows(
+    out: Path, trials: list[tuple[dict[str, Any], Trial]], done: TrialsOutcome
+) -> list[dict[str, Any]]:
+    """One row per trial: ``trial_id``, ``status`` (done / failed), ``seed``, ``param:``
+    values, the run's summary (scalars) or ``error``, and ``run_dir``."""
+    rows: list[dict[str, Any]] = []
+    for combo, trial in trials:
+        params = {f"param:{k}": v for k, v in combo.items()}
+        head = {"trial_id": trial_id(out, trial)}
+        summary = done.summaries.get(trial.run_dir)
+        if summary is not None:
+            flat = {k: v for k, v in summary.items() if not isinstance(v, dict | list)}
+            flat.pop("seed", None)
+            row = {**head, "status": "done", "seed": trial.seed, **params, **flat, "error": None}
+        else:
+            failure = done.failures.get(trial.run_dir)
+            error = failure.error if failure is not None else "not run"
+            row = {**head, "status": "failed", "seed": trial.seed, **params, "error": error}
+        rows.append({**row, "run_dir": trial.run_dir})
+    return rows
 
 
 def run_sweep(
     scenario: Scenario,
     out_dir: str | Path,
     *,
-    seeds: int = 1,
+    seeds: int | list[int] | None = None,
     executor: str = "serial",
     workers: int | None = None,
     address: str | None = None,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[[str], None] | TrialProgress | None = None,
 ) -> SweepResult:
-    """Run every combination of ``scenario.sweep`` for ``seeds`` seeds.
+    """Run every combination of the ``sweep:`` block for every seed, into a trusted store.
 
-    Trials whose run folder already holds ``summary.json`` are reused; the others run
-    on ``executor`` (see :mod:`tether.experiments.executors`). The table
-    ``sweep.parquet`` has one row per trial, finished or failed (its ``seed`` and
-    ``error``, null for a finished one), and is written even when some fail; then
-    the first failure is raised in one line: a :class:`TetherError` if every
-    failure was bad input, else :class:`TrialsFailed` (an internal error).
+    Before any trial: the block is parsed and every combination is built at the first
+    seed (:func:`tether.experiments.plan.check_combinations`, as ``tether validate``
+    does), and the folder is opened as a store (a changed scenario is refused). Trials
+    whose run folder already holds ``summary.json`` are reused; the others run on
+    ``executor`` (see :mod:`tether.experiments.executors`). The table
+    ``sweep.parquet`` has one row per trial, finished or failed (``status``,
+    ``seed``, ``error``), and is written even when some fail; then the first failure
+    is raised in one line: a :class:`TetherError` if every failure was bad input, else
+    :class:`TrialsFailed` (an internal error).
+
+    Parameters
+    ----------
+    seeds : int or list of int, optional
+        A count (from the scenario's ``seed``) or a list; default: the block's
+        ``seeds``, else one seed.
     """
     check_executor(executor, workers, address)
-    check_sweep(scenario, strategy_class(scenario))
     trials = trials_of(scenario, out_dir, seeds)
-    out = prepare_sweep_folder(scenario, out_dir)
+    check_combinations(scenario, seeds)
+    out = open_store(scenario, out_dir)
     done = run_trials(
         [t for _, t in trials], executor=executor, workers=workers, address=address,
         progress=progress,
     )  # fmt: skip
-    summaries, errors, n_skipped = done.summaries, done.errors, done.n_skipped
-    rows: list[dict[str, Any]] = []
-    finished: list[dict[str, Any]] = []
-    for combo, trial in trials:
-        params = {f"param:{k}": v for k, v in combo.items()}
-        if trial.run_dir in summaries:
-            summary = summaries[trial.run_dir]
-            flat = {k: v for k, v in summary.items() if not isinstance(v, dict | list)}
-            row = {**params, **flat, "run_dir": trial.run_dir, "error": None}
-            finished.append(row)
-        else:
-            failure = done.failures.get(trial.run_dir)
-            error = failure.error if failure is not None else "not run"
-            row = {**params, "seed": trial.seed, "run_dir": trial.run_dir, "error": error}
-        rows.append(row)
+    rows = trial_rows(out, trials, done)
+    finished = [r for r in rows if r["status"] == "done"]
     try:
         table = write_rows(out / SWEEP_TABLE, rows)
         drawn = sweep_figures(finished, scenario.team.n_robots, scenario.name)
         figures = [save_figure(fig, out / "figures" / name) for fig, name in drawn]
     except OSError as exc:
         raise OutputError(f"{out}: cannot write the sweep table ({exc.strerror or exc})") from None
+    errors = done.errors
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-        message = f"{errors[0]}{more}; every trial is in {table} (column error)"
+        message = f"{errors[0]}{more}; every trial is in {table} (columns status, error)"
         internal = [f for f in done.failures.values() if f.internal]
         if internal:
             raise TrialsFailed(message, internal[0].details)
         raise TetherError(message)
-    return SweepResult(table, len(finished), n_skipped, figures, len(errors))
+    return SweepResult(table, len(finished), done.n_skipped, figures, len(errors))
 
 
 # per-step column -> (x column, figure name, y label, scale); one figure per column runs record
@@ -278,7 +228,7 @@ def sweep_figures(
             continue
         series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for row in rows:
-            label = combo_label({k[6:]: v for k, v in row.items() if k.startswith("param:")})
+            label = sweep_label({k[6:]: v for k, v in row.items() if k.startswith("param:")})
             steps_file = Path(row["run_dir"]) / "steps.parquet"
             if label in series or not steps_file.exists():
                 continue

@@ -1,0 +1,110 @@
+"""Progress of a sweep: a rich progress bar on a terminal, one plain line per trial elsewhere.
+
+Both show what :func:`tether.experiments.sweep.run_trials` reports: trials done (run
+now or found finished), trials failed and, on the bar, the time left.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Protocol
+
+from tether.experiments.executors import TrialOutcome
+
+__all__ = ["LineProgress", "RichProgress", "TrialProgress", "progress_for"]
+
+
+class TrialProgress(Protocol):
+    """What a sweep tells about its progress."""
+
+    def start(self, total: int, skipped: int) -> None:
+        """``total`` trials to run now; ``skipped`` found finished in the folder."""
+
+    def advance(self, outcome: TrialOutcome, done: int, failed: int) -> None:
+        """One more trial finished (``outcome``); ``done`` and ``failed`` so far (this run)."""
+
+    def stop(self) -> None:
+        """The sweep's trials are all finished (or it was interrupted)."""
+
+
+class LineProgress:
+    """One plain line per trial, ``[k/n] <run folder> done`` or ``... failed: <error>``.
+
+    Parameters
+    ----------
+    say : callable
+        Where a line goes (e.g. ``print``).
+    """
+
+    def __init__(self, say: Callable[[str], None]) -> None:
+        self.say = say
+        self.total = 0
+
+    def start(self, total: int, skipped: int) -> None:
+        self.total = total
+
+    def advance(self, outcome: TrialOutcome, done: int, failed: int) -> None:
+        status = "done" if outcome.summary is not None else f"failed: {outcome.error}"
+        self.say(f"[{done + failed}/{self.total}] {outcome.trial.run_dir} {status}")
+
+    def stop(self) -> None:
+        pass
+
+
+class RichProgress:
+    """A rich progress bar: trials done / total, failed, elapsed and time left.
+
+    Parameters
+    ----------
+    console : rich.console.Console
+        The terminal to draw on.
+    """
+
+    def __init__(self, console: Any) -> None:
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self._bar = Progress(
+            TextColumn("trials"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("[red]{task.fields[failed]} failed"),
+            TextColumn("elapsed"),
+            TimeElapsedColumn(),
+            TextColumn("left"),
+            TimeRemainingColumn(),
+            console=console,
+            transient=False,
+        )
+        self._task: Any = None
+
+    def start(self, total: int, skipped: int) -> None:
+        self._bar.start()
+        self._task = self._bar.add_task("sweep", total=total, failed=0)
+        if skipped:
+            self._bar.console.print(f"{skipped} trials already done in the folder", markup=False)
+
+    def advance(self, outcome: TrialOutcome, done: int, failed: int) -> None:
+        self._bar.update(self._task, completed=done + failed, failed=failed)
+        if outcome.summary is None:
+            self._bar.console.print(
+                f"failed: {outcome.trial.run_dir} (seed {outcome.trial.seed}): {outcome.error}",
+                markup=False,
+                highlight=False,
+            )
+
+    def stop(self) -> None:
+        self._bar.stop()
+
+
+def progress_for(console: Any, say: Callable[[str], None]) -> TrialProgress:
+    """A progress bar when ``console`` is a terminal, else plain lines through ``say``."""
+    if getattr(console, "is_terminal", False):
+        return RichProgress(console)
+    return LineProgress(say)
