@@ -10,7 +10,7 @@ machine and wall times) and ``docs/figures/multi_target_fig9.png``.
 
     python benchmarks/fig9.py --seeds 100                  # the paper's 1,800 trials
     python benchmarks/fig9.py --seeds 5 --sizes 10 20 35   # a quick version
-    python benchmarks/fig9.py --seeds 5 --no-run           # figure from finished trials
+    python benchmarks/fig9.py --no-run                     # figure from every finished trial
 
 Trends (in the JSON): the ratio of the median completion time at the largest team to
 the smallest, Spearman's rank correlation of each metric with N over all trials (with
@@ -58,9 +58,11 @@ def run_column(scene: str, out: Path, seeds: int, sizes: list[int], workers: int
     return time.perf_counter() - tic
 
 
-def load_rows(out: Path, sizes: list[int], seeds: int) -> list[dict]:
+def load_rows(out: Path, sizes: list[int], seeds: int | None) -> list[dict]:
+    """The trials of one scene's table (of the first ``seeds`` seeds; all if None)."""
     rows = pq.read_table(out / "sweep.parquet").to_pylist()
-    return [r for r in rows if r["param:team.n_robots"] in sizes and r["seed"] < seeds]
+    return [r for r in rows if r["param:team.n_robots"] in sizes
+            and (seeds is None or r["seed"] < seeds)]  # fmt: skip
 
 
 def failure(row: dict) -> str:
@@ -156,7 +158,8 @@ def main() -> None:
         out = a.runs / scene
         if not a.no_run:
             result["wall_time_s"][scene] = run_column(scene, out, a.seeds, a.sizes, a.workers)
-        result["scenes"][scene] = summarise(load_rows(out, a.sizes, a.seeds), a.sizes)
+        seeds = None if a.no_run else a.seeds  # a summary takes every finished seed
+        result["scenes"][scene] = summarise(load_rows(out, a.sizes, seeds), a.sizes)
         s = result["scenes"][scene]
         print(f"{scene}: {s['trials']} trials, complete {s['complete_share']}, completion "
               f"median ratio N={a.sizes[-1]}/N={a.sizes[0]}: "
