@@ -174,7 +174,10 @@ def table(rows: list[dict]) -> str:
         if row["key"] == LARGE[0]:
             small = row["view_max_mb_2"]
             small_kept = "every step" if small["stride"] == 1 else f"1 in {small['stride']} steps"
-            view_cell = f"**{view_cell}**, {kept}; `--max-mb 2`: {mb(small['mb'])}, {small_kept}"
+            view_cell = (
+                f"**{mb(v['mb'])}**, {v['seconds']:.1f} s, {kept}; "
+                f"`--max-mb 2`: {mb(small['mb'])}, {small_kept}"
+            )
             bag += " (uncompressed SQLite)"
         lines.append(
             f"| {label(row)} | {view_cell} | {a['frames']} frames, {mb(a['mb'])}, "
