@@ -42,6 +42,7 @@ KERNEL_MODULES = (
     "world/los_kernels.py",
     "graph/kernels.py",
     "recurrent/planning/steiner_kernels.py",
+    "silent/steering_kernels.py",
 )
 
 _forced: bool | None = None
