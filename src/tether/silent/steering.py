@@ -149,6 +149,19 @@ def _pair_bounds(
     return np.maximum(bound, 0.0)
 
 
+#: below this many robots the kernel runs only if numba is loaded already (or
+#: TETHER_JIT=on): loading numba (about a second) would cost a short small-team run more
+#: than the kernel saves (about 2 ms per step at 20 robots)
+KERNEL_MIN_ROBOTS = 200
+
+
+def _use_kernel(n: int) -> bool:
+    """Whether :func:`constrained_steps` runs the compiled kernel for ``n`` robots."""
+    if n == 0 or not jit.enabled():
+        return False
+    return n >= KERNEL_MIN_ROBOTS or jit.warm() or jit.mode() == "on"
+
+
 def constrained_steps(
     desired: np.ndarray,
     measured: np.ndarray,
@@ -179,7 +192,7 @@ def constrained_steps(
     """
     n = len(desired)
     indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
-    if jit.enabled() and len(desired) and (len(observer) < 2 or (np.diff(observer) >= 0).all()):
+    if _use_kernel(n) and (len(observer) < 2 or (np.diff(observer) >= 0).all()):
         from tether.silent.steering_kernels import constrained_steps_kernel
 
         return constrained_steps_kernel(
