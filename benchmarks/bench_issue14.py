@@ -7,8 +7,8 @@ shared) the probes' ``time.perf_counter`` is ``time.process_time``. The headline
 each row is compared with the issue's goal; results go to
 ``benchmarks/results/issue14.json`` with the machine, both git hashes and the load.
 
-    python benchmarks/bench_issue14.py --old-root /work/base [--rows step35_free ...]
-        [--pairs 2] [--clock cpu|wall]
+    python benchmarks/bench_issue14.py --old-root /work/base [--mid main /tmp/main]
+        [--rows step35_free ...] [--pairs 2] [--clock cpu|wall] [--out PATH]
 """
 
 from __future__ import annotations
@@ -120,10 +120,10 @@ def extra(row: str, res: dict) -> dict[str, Any]:
     return {}
 
 
-def measure(row: str, old: Path, new: Path, pairs: int, clock: str) -> dict:
+def measure(row: str, trees: dict[str, Path], pairs: int, clock: str) -> dict:
+    """One row on every tree (the last one is "new": it is judged against the goal)."""
     name, kwargs, key, goal, sense = ROWS[row]
-    trees = {"old": old, "new": new}
-    sides = ["new"] if row in ONLY_NEW else ["old", "new"]
+    sides = ["new"] if row in ONLY_NEW else list(trees)
     runs: dict[str, list[dict]] = {s: [] for s in sides}
     for i in range(1 if row in SINGLE else pairs):
         for side in sides if i % 2 == 0 else sides[::-1]:
@@ -150,6 +150,12 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--old-root", type=Path, required=True)
     ap.add_argument("--new-root", type=Path, default=HERE.parent)
+    ap.add_argument(
+        "--mid",
+        nargs=2,
+        metavar=("NAME", "ROOT"),
+        help="a third tree timed between old and new (e.g. main 1a3426c)",
+    )
     ap.add_argument("--rows", nargs="+", default=list(ROWS), choices=list(ROWS))
     ap.add_argument("--pairs", type=int, default=2)
     ap.add_argument("--clock", choices=["cpu", "wall"], default="cpu")
@@ -159,30 +165,31 @@ def main(argv: list[str] | None = None) -> None:
     sys.path.insert(0, str(HERE))
     from _machine import machine
 
+    trees = {"old": a.old_root.resolve()}
+    if a.mid:
+        trees[a.mid[0]] = Path(a.mid[1]).resolve()
+    trees["new"] = a.new_root.resolve()
     result = json.loads(a.out.read_text()) if a.out.exists() else {"rows": {}}
     result.update(
         {
             "what": "issue 14 table: old tree vs new tree, interleaved, one subprocess per probe",
             "machine": machine(),
-            "old": {"root": str(a.old_root), "git_hash": git_hash(a.old_root)},
-            "new": {"root": str(a.new_root), "git_hash": git_hash(a.new_root)},
+            "trees": {name: {"root": str(p), "git_hash": git_hash(p)} for name, p in trees.items()},
             "clock": a.clock,
             "conditions": a.conditions,
         }
     )
     for row in a.rows:
         print(f"[{row}]", flush=True)
-        res = measure(row, a.old_root.resolve(), a.new_root.resolve(), a.pairs, a.clock)
+        res = measure(row, trees, a.pairs, a.clock)
         res["clock"] = a.clock
         res["date"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
         result["rows"][row] = res
         a.out.parent.mkdir(parents=True, exist_ok=True)
         a.out.write_text(json.dumps(result, indent=1) + "\n")
-        old_v = res.get("old")
-        old_s = "-" if old_v is None else f"{old_v:.4g}"
+        vals = "  ".join(f"{t} {res[t]:.4g}" for t in trees if t in res)
         print(
-            f"{row:16s} goal {res['goal_sense']} {res['goal']:.4g}  old {old_s}"
-            f"  new {res['new']:.4g}  met {res['met']}",
+            f"{row:16s} goal {res['goal_sense']} {res['goal']:.4g}  {vals}  met {res['met']}",
             flush=True,
         )
 
