@@ -264,3 +264,17 @@ def test_whole_runs_are_the_same_with_and_without_kernels(name: str, robots: int
     assert_same(fast.final_state.velocities, ref.final_state.velocities)
     assert [r.lambda2 for r in fast.records] == [r.lambda2 for r in ref.records]
     assert fast.strategy_metrics == ref.strategy_metrics
+
+
+@pytest.mark.parametrize("on", [False, True])
+def test_weights_with_an_empty_obstacle_index_are_free_space(on: bool) -> None:
+    """An index without points gives the free-space weights (issue 14: one evaluation)."""
+    rng = np.random.default_rng(5)
+    q = rng.uniform(0.0, 12.0, (30, 3))
+    empty = ObstacleIndex.from_world(World(dim=3))
+    assert empty.tree is None
+    with jit.using(on):
+        a = compute_weights(q, PARAMS, empty)
+        b = compute_weights(q, PARAMS, None)
+    for name in GRAPH_FIELDS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

@@ -1,4 +1,9 @@
-"""Dreyfus-Wagner Steiner trees against brute force on small random graphs."""
+"""Dreyfus-Wagner Steiner trees against brute force on small random graphs.
+
+Every test runs with the reference (numpy) path and, if numba is installed, with the
+compiled kernel of :mod:`tether.recurrent.planning.steiner_kernels` (issue 14); the
+last test checks that both give the same optimum on larger graphs.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +13,17 @@ import networkx as nx
 import numpy as np
 import pytest
 
+from tether import jit
 from tether.recurrent.planning.steiner import steiner_tree
+
+MODES = [False, True] if jit.available() else [False]
+
+
+@pytest.fixture(autouse=True, params=MODES, ids=lambda on: "kernel" if on else "reference")
+def kernel_mode(request: pytest.FixtureRequest):  # noqa: ANN201
+    """Run each test with the compiled kernel off and on."""
+    with jit.using(request.param):
+        yield request.param
 
 
 def brute_force_steiner(graph: nx.Graph, terminals: list, weight: str = "weight") -> float:
@@ -98,3 +113,25 @@ def test_trivial_and_invalid_inputs() -> None:
     h.edges[0, 1]["weight"] = -1.0
     with pytest.raises(ValueError):
         steiner_tree(h, [0, 2])
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_kernel_and_reference_agree(seed: int, kernel_mode: bool) -> None:
+    """Same optimum on 30-120 vertices and up to 9 terminals: exactly with integer weights."""
+    if not kernel_mode:
+        pytest.skip("compares the kernel with the reference")
+    rng = np.random.default_rng(1000 + seed)
+    n = int(rng.integers(30, 121))
+    g = nx.connected_watts_strogatz_graph(n, 4, 0.3, seed=seed)
+    integer = seed % 2 == 0
+    for u, v in g.edges:
+        g.edges[u, v]["weight"] = int(rng.integers(0, 20)) if integer else float(rng.uniform(0, 5))
+    terminals = [int(t) for t in rng.choice(n, size=int(rng.integers(2, 10)), replace=False)]
+    fast, tree = steiner_tree(g, terminals)
+    with jit.using(False):
+        ref, _ = steiner_tree(g, terminals)
+    if integer:
+        assert fast == ref
+    else:
+        assert fast == pytest.approx(ref, rel=1e-12, abs=1e-12)
+    assert_valid_tree(g, tree, terminals, fast)

@@ -41,6 +41,8 @@ KERNEL_MODULES = (
     "world/clearance_kernels.py",
     "world/los_kernels.py",
     "graph/kernels.py",
+    "recurrent/planning/steiner_kernels.py",
+    "silent/steering_kernels.py",
 )
 
 _forced: bool | None = None

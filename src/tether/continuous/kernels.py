@@ -425,6 +425,12 @@ def warm_up() -> float:
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
+    from tether.recurrent.planning.steiner_kernels import warm_up as steiner_warm_up
+
+    steiner_warm_up()
+    from tether.silent.steering_kernels import warm_up as steering_warm_up
+
+    steering_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds

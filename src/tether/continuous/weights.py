@@ -137,6 +137,10 @@ def compute_weights(
     compute the same arrays (to the last bit) without numpy's per-call overhead.
     """
     q = np.asarray(positions, dtype=float)
+    if obstacles is not None and obstacles.tree is None:
+        # an index without points is free space: B = S(inf) = 1 and dB = 0, so the obstacle
+        # branch gives the same numbers (up to the sign of zeros), at twice the cost
+        obstacles = None
     if jit.enabled():
         return _compute_weights_kernel(q, params, obstacles, pairs)
     return _compute_weights_reference(q, params, obstacles, pairs)
@@ -202,8 +206,6 @@ def _evaluate_kernel(
     pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added = out
     if has:
         obstacles.kernel_added(added)
-    elif obstacles is not None and len(pairs):  # an index without points: the obstacle branch
-        return _compute_weights_kernel(q, params, obstacles, pairs)
     return WeightedGraph(n, pairs, pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit,
                          coll_logd, w, lap if n <= SUBSET_MAX_N else None)  # fmt: skip
 

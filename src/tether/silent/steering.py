@@ -37,6 +37,7 @@ from typing import Literal
 
 import numpy as np
 
+from tether import jit
 from tether.geometry import unit
 from tether.graph import expand_rows
 
@@ -148,6 +149,19 @@ def _pair_bounds(
     return np.maximum(bound, 0.0)
 
 
+#: below this many robots the kernel runs only if numba is loaded already (or
+#: TETHER_JIT=on): loading numba (about a second) would cost a short small-team run more
+#: than the kernel saves (about 2 ms per step at 20 robots)
+KERNEL_MIN_ROBOTS = 200
+
+
+def _use_kernel(n: int) -> bool:
+    """Whether :func:`constrained_steps` runs the compiled kernel for ``n`` robots."""
+    if n == 0 or not jit.enabled():
+        return False
+    return n >= KERNEL_MIN_ROBOTS or jit.warm() or jit.mode() == "on"
+
+
 def constrained_steps(
     desired: np.ndarray,
     measured: np.ndarray,
@@ -171,15 +185,29 @@ def constrained_steps(
     instead of waiting, which relieves the tension that otherwise stalls a group
     spread near ``d_max`` (large ``d0``). Every candidate obeys (1)-(2), so
     Theorem 1 holds either way.
+
+    With :func:`tether.jit.enabled` (and measurements grouped by observer, as an
+    :class:`~tether.sensing.Observation` holds them), the compiled
+    :mod:`tether.silent.steering_kernels` computes the same steps robot by robot.
     """
     n = len(desired)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
+    if _use_kernel(n) and (len(observer) < 2 or (np.diff(observer) >= 0).all()):
+        from tether.silent.steering_kernels import constrained_steps_kernel
+
+        return constrained_steps_kernel(
+            np.ascontiguousarray(desired, dtype=float),
+            np.ascontiguousarray(measured, dtype=float).reshape(-1, desired.shape[1]),
+            indptr.astype(np.int64), float(d_max_m), float(radial_error_m),
+            float(angular_error_rad), float(min_separation_m), float(max_step_m),
+            bool(search_directions),
+        )  # fmt: skip
     length = np.linalg.norm(desired, axis=1)
     if search_directions:
         owner = np.concatenate([np.arange(n), observer])
         cand = np.concatenate([unit(desired), unit(measured)])
     else:
         owner, cand = np.arange(n), unit(desired)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
     which, entry = expand_rows(indptr, owner)
     pair = _pair_bounds(
         cand[which],

@@ -51,6 +51,7 @@ from tether.recurrent.planning.steiner import _path_edges, dreyfus_wagner
 CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
 FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles
 FIRST_BAND = 1 / 64  # width of the first utility band, relative to the best subset
+LOWEST_BAND_RATIO = 0.75  # a band (lo, hi] has lo >= this * hi (unless it is the last)
 
 
 @dataclass
@@ -360,13 +361,15 @@ def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.nda
     Yields ``(util, size, combos)`` (``combos`` padded with -1 to ``delta``
     columns) ordered by decreasing utility, increasing size, then colex rank,
     i.e. exactly the order of a global sort; bands are disjoint utility
-    intervals ``(lo, hi]`` of doubling width, so a consumer that stops early
-    (Step 10) never makes the later bands.
+    intervals ``(lo, hi]`` of doubling width, ``lo >= LOWEST_BAND_RATIO * hi``,
+    so a consumer that stops early (Step 10) never makes the later bands.
     """
     top = float(uf[:delta].sum())
-    hi, width = np.inf, top * FIRST_BAND
+    floor = float(uf.min())  # no subset has a smaller utility (utilities are > 0)
+    hi, lo = np.inf, top - top * FIRST_BAND
     while True:
-        lo = top - width if width < top else -1.0  # utilities are > 0
+        if lo < max(floor, 1e-9 * top):
+            lo = -1.0  # the last band: every subset left
         parts = [_subsets_in_band(uf, s, lo, hi) for s in range(1, delta + 1)]
         combos = np.full((sum(len(p) for p in parts), delta), -1, dtype=np.intp)
         util, size, rank, at = [], [], [], 0
@@ -381,7 +384,11 @@ def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.nda
         yield util_a[order], size_a[order], combos[order]
         if lo < 0:
             return
-        hi, width = lo, 2 * width
+        # widths double (as Algorithm 1's bands), but a band never reaches below
+        # LOWEST_BAND_RATIO of its upper end: the number of subsets grows steeply as the
+        # utility falls, and Step 10 usually stops inside the band (issue 14: one band of
+        # 1.9 M subsets cost 2 s where the search stopped in its first thousands)
+        hi, lo = lo, max(2.0 * lo - top, LOWEST_BAND_RATIO * lo)
 
 
 def solve_apx(problem: Problem, delta: int) -> ApxResult:

@@ -1,0 +1,68 @@
+"""Print issue 14's table (goal, old, main, new, met?) from bench_issue14.py's JSON.
+
+Rows come from ``results/issue14.json`` (old 4cef8e4, main, new in one run); rows it
+lacks from ``results/issue14_first_run.json`` (old against main, whose code for those
+rows perf2 did not change, so main's number stands for new too).
+
+    python benchmarks/issue14_table.py [--final PATH] [--first PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+LABELS = {
+    "step35_free": ("connectivity-force step, 35 robots, free 3-D", "us", 1e6),
+    "step35_town": ("the same, 35 robots in the town", "us", 1e6),
+    "step1000_free": ("the same, 1,000 robots free", "ms", 1e3),
+    "step10000_free": ("the same, 10,000 robots free", "ms", 1e3),
+    "silent10000": ("silent step, 10,000 robots, occlusion on", "steps/s", 1.0),
+    "silent20": ("silent step, 20 robots", "ms", 1.0),
+    "placement100k": ("random connected placement, 100,000 robots", "s", 1.0),
+    "placement1000": ("(placement, 1,000 robots: old vs new)", "s", 1.0),
+    "steiner": ("exact steiner_tree / networkx mehlhorn (median ratio)", "x", 1.0),
+    "ilp": ("exact configuration ILP, SCIP median (max)", "s", 1.0),
+    "recurrent_grass": ("recurrent_grass 900 steps, CPU time", "s", 1.0),
+}
+
+
+def cell(row: dict, side: str, scale: float) -> str:
+    if side not in row:
+        return "-"
+    value = row[side] * scale
+    text = f"{value:,.0f}" if value >= 1000 else f"{value:.3g}"
+    extra = row.get(f"{side}_extra") or {}
+    if "scip_max_s" in extra:
+        text += f" ({extra['scip_max_s']:.3g})"
+    return text
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--final", type=Path, default=HERE / "results" / "issue14.json")
+    ap.add_argument("--first", type=Path, default=HERE / "results" / "issue14_first_run.json")
+    a = ap.parse_args()
+    final = json.loads(a.final.read_text())["rows"] if a.final.exists() else {}
+    first = json.loads(a.first.read_text())["rows"] if a.first.exists() else {}
+    print("| work | goal | old (4cef8e4) | main (1a3426c) | new (perf2) | met? |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for key, (label, unit, scale) in LABELS.items():
+        if key in final:
+            row, main_side = final[key], "main"
+        elif key in first:
+            row, main_side = first[key], "new"
+        else:
+            continue
+        goal = f"{row['goal_sense']} {row['goal'] * scale:.3g} {unit}"
+        new = cell(row, "new", scale)
+        main_ = cell(row, main_side, scale)
+        met = "yes" if row["met"] else "no"
+        print(f"| {label} | {goal} | {cell(row, 'old', scale)} | {main_} | {new} | {met} |")
+
+
+if __name__ == "__main__":
+    main()

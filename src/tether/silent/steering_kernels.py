@@ -1,0 +1,105 @@
+"""Compiled :func:`tether.silent.steering.constrained_steps` (numba), robot by robot.
+
+Constraints (1) and (2) of Kerestecioglu and Cezayirli, "Connected Navigation of
+Non-Communicating Mobile Agents" (Sec. IV), evaluated robustly for the sensor's error
+bounds exactly as :func:`tether.silent.steering._pair_bounds` does, and the candidate
+search of :func:`~tether.silent.steering.constrained_steps`; one pass per robot over its
+own measurements instead of numpy arrays of ``sum_i (1 + deg_i) deg_i`` pairs. The
+arithmetic is the reference's, term for term (norms and dot products summed in the same
+order); ``arccos`` and ``cos`` come from the C library instead of numpy's, so results
+agree to rounding (tests: 1e-12). Imported only when :func:`tether.jit.enabled`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+EPS = 1e-12  # tether.geometry.unit's default
+
+
+@njit(cache=True)
+def _bound(u, mu, dist, d_m, r_err, ang, min_sep):  # noqa: ANN001, ANN202, PLR0913
+    """:func:`~tether.silent.steering._pair_bounds` for one direction and one measurement."""
+    cos_phi = 0.0
+    for c in range(len(u)):
+        cos_phi += u[c] * mu[c]
+    phi = math.acos(min(max(cos_phi, -1.0), 1.0))
+    worst = phi + ang
+    half_pi = math.pi / 2
+    if worst < half_pi:
+        bound = (dist - r_err) * math.cos(min(worst, half_pi))  # constraint (2)
+    else:
+        bound = 0.5 * (d_m - dist)  # constraint (1)
+    if min_sep > 0 and phi - ang < half_pi:
+        bound = min(bound, 0.5 * (dist - r_err - min_sep))
+    return max(bound, 0.0)
+
+
+@njit(cache=True)
+def _norm_unit(v, out):  # noqa: ANN001, ANN202
+    """``||v||`` and ``out = unit(v)`` as :func:`tether.geometry.unit` (zero stays zero)."""
+    s = 0.0
+    for c in range(len(v)):
+        s += v[c] * v[c]
+    norm = math.sqrt(s)
+    for c in range(len(v)):
+        out[c] = v[c] / max(norm, EPS) if norm > EPS else 0.0
+    return norm
+
+
+@njit(cache=True)
+def constrained_steps_kernel(  # noqa: ANN201, PLR0913
+    desired, measured, indptr, d_max, r_err, ang, min_sep, max_step, search
+):  # noqa: ANN001
+    """Steps of :func:`~tether.silent.steering.constrained_steps` (measurements by observer).
+
+    ``indptr``: robot ``i``'s measurements are ``measured[indptr[i]:indptr[i + 1]]``.
+    """
+    n, dim = desired.shape
+    d_m = d_max - r_err
+    m = len(measured)
+    dist = np.empty(m)
+    mu = np.empty((m, dim))
+    for k in range(m):
+        dist[k] = _norm_unit(measured[k], mu[k])
+    steps = np.zeros((n, dim))
+    ud = np.empty(dim)
+    for i in range(n):
+        length = _norm_unit(desired[i], ud)
+        lo, hi = indptr[i], indptr[i + 1]
+        best_k, best_allowed, best_progress = -1, 0.0, -np.inf
+        last = hi if search else lo
+        for cand in range(lo - 1, last):  # lo - 1: the desired direction, then each robot
+            u = ud if cand < lo else mu[cand]
+            b = np.inf
+            for k in range(lo, hi):
+                b = min(b, _bound(u, mu[k], dist[k], d_m, r_err, ang, min_sep))
+            allowed = min(min(length, b), max_step)
+            if not search:
+                for c in range(dim):
+                    steps[i, c] = u[c] * allowed
+                break
+            dot = 0.0
+            for c in range(dim):
+                dot += u[c] * ud[c]
+            progress = allowed * dot
+            if progress > best_progress:  # ties keep the earlier candidate
+                best_k, best_allowed, best_progress = cand, allowed, progress
+        if search and best_progress > 0.0:
+            u = ud if best_k < lo else mu[best_k]
+            for c in range(dim):
+                steps[i, c] = u[c] * best_allowed
+    return steps
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the kernel for 2-D and 3-D teams."""
+    for dim in (2, 3):
+        desired = np.ones((2, dim))
+        measured = np.eye(2, dim)
+        indptr = np.array([0, 1, 2], np.int64)
+        for search in (False, True):
+            constrained_steps_kernel(desired, measured, indptr, 15.0, 0.4, 0.2, 0.5, np.inf, search)

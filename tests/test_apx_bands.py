@@ -1,0 +1,42 @@
+"""APX's subset bands (genNewSubset) against one global sort of every subset.
+
+:func:`tether.recurrent.planning.apx._bands` makes the subsets of at most ``delta``
+frontiers band by band of utility so that Algorithm 1 (Banfi et al., Sec. V) can stop
+early; the band widths are a matter of speed only (issue 14), so the bands joined must
+be exactly the global order: decreasing utility, increasing size, increasing colex rank.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from tether.recurrent.planning import apx
+
+
+def global_order(uf: np.ndarray, delta: int) -> list[tuple[int, ...]]:
+    ranker = apx._Ranker(len(uf), delta)
+    rows = []
+    for s in range(1, delta + 1):
+        for c in itertools.combinations(range(len(uf)), s):
+            util = float(uf[list(c)].sum())
+            rows.append((-util, s, int(ranker.rank(np.array([c]))[0]), c))
+    return [r[3] for r in sorted(rows)]
+
+
+@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("ratio", [0.0, 0.5, 0.75, 0.95])
+def test_bands_joined_are_the_global_order(seed: int, ratio: float, monkeypatch) -> None:  # noqa: ANN001
+    rng = np.random.default_rng(seed)
+    k, delta = int(rng.integers(4, 13)), int(rng.integers(1, 5))
+    uf = np.sort(rng.choice([0.5, 1.0, 2.0, 7.0], size=k) * rng.uniform(0.2, 3.0, size=k))[::-1]
+    if seed % 3 == 0:
+        uf = np.round(uf) + 1.0  # ties: the order falls back to size, then rank
+        uf = np.sort(uf)[::-1]
+    monkeypatch.setattr(apx, "LOWEST_BAND_RATIO", ratio)
+    got = []
+    for _util, size, combos in apx._bands(uf, delta, apx._Ranker(k, delta)):
+        got.extend(tuple(int(x) for x in row[:s]) for row, s in zip(combos, size, strict=True))
+    assert got == global_order(uf, delta)
