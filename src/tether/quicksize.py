@@ -24,22 +24,11 @@ from tether.config import (
 from tether.errors import ScenarioError
 from tether.sweepspec import SweepError, parse_sweep, quick_block
 
-__all__ = ["QUICK_SUFFIX", "has_quick", "load_scenario_at", "quick_data"]
+__all__ = ["QUICK_SUFFIX", "load_scenario_at", "quick_data"]
 
 #: appended to the scenario name (and the default sweep folder) of the quick size
 QUICK_SUFFIX = "-quick"
 _MAX_NAME = 100
-
-
-def has_quick(data: dict[str, Any]) -> bool:
-    """Whether scenario data has a well-formed ``sweep.quick`` entry."""
-    block = data.get("sweep")
-    if not isinstance(block, dict) or "quick" not in block:
-        return False
-    try:
-        return parse_sweep(block).quick is not None
-    except SweepError:
-        return False
 
 
 def quick_data(data: dict[str, Any], label: str, base_dir: Path | None = None) -> dict[str, Any]:
