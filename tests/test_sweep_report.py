@@ -82,3 +82,26 @@ def test_report_of_a_folder_that_is_not_a_sweep_is_one_line(tmp_path, capsys):
         f"error: {tmp_path}: not a finished sweep folder (no sweep.parquet); run "
         f"`tether sweep SCENARIO --out {tmp_path}` first"
     )
+
+
+def test_a_zip_group_is_named_and_plotted_by_its_first_axis():
+    from tether.experiments.results import SweepResults
+
+    sweep = {
+        "axes": {"team.n_robots": [10, 15], "world.scene": ["empty", "town"],
+                 "sensing.range_m": [6.0, 5.0]},
+        "zip": [["world.scene", "sensing.range_m"]],
+    }  # fmt: skip
+    rows = [
+        {"status": "done", "param:team.n_robots": n, "param:world.scene": s,
+         "param:sensing.range_m": r, "m": float(n)}
+        for n in (10, 15) for s, r in (("empty", 6.0), ("town", 5.0))
+    ]  # fmt: skip
+    axes = ["team.n_robots", "world.scene", "sensing.range_m"]
+    results = SweepResults(Path("."), {"sweep": sweep}, rows, axes)
+    assert results.shown_axes == ["team.n_robots", "world.scene"]
+    assert results.numeric_axes() == ["team.n_robots"]  # not range_m: it moves with the scene
+    assert results.label(rows[1]) == "n_robots=10,scene=town"
+    # a first axis whose values repeat in the group cannot name the rows alone
+    sweep["axes"]["world.scene"] = ["town", "town"]
+    assert results.shown_axes == axes and "sensing.range_m" in results.numeric_axes()

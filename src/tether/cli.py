@@ -36,13 +36,20 @@ SetOpt = Annotated[
 ]
 
 
-def _load(scenario: str, overrides: list[str] | None):
-    from tether.config import apply_overrides, read_scenario_data, scenario_from_dict
+QuickOpt = Annotated[
+    bool,
+    typer.Option(
+        "--quick", help="The experiment at its quick size (the sweep block's `quick` entry)."
+    ),
+]
+#: the sweep folder without --out (``-quick`` appended for the quick size)
+DEFAULT_SWEEP_DIR = "runs/sweep"
 
-    data, label, base = read_scenario_data(scenario)
-    if overrides:
-        data = apply_overrides(data, overrides, label)
-    return scenario_from_dict(data, label, base)
+
+def _load(scenario: str, overrides: list[str] | None, quick: bool = False):
+    from tether.quicksize import load_scenario_at
+
+    return load_scenario_at(scenario, quick=quick, overrides=overrides)
 
 
 @app.command()
@@ -105,9 +112,12 @@ def run(
 @app.command()
 def sweep(
     scenario: ScenarioArg,
-    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Sweep folder.")] = Path(
-        "runs/sweep"
-    ),
+    out_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--out", "-o", help="Sweep folder (default: runs/sweep, runs/sweep-quick with --quick)."
+        ),
+    ] = None,
     seeds: Annotated[
         int | None,
         typer.Option(min=1, help="Seeds per combination (default: the sweep block's, else 1)."),
@@ -123,15 +133,22 @@ def sweep(
         str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")
     ] = None,
     set_: SetOpt = None,
+    quick: QuickOpt = False,
 ) -> None:
     """Run the scenario's `sweep:` combinations x seeds (resumable) into one table of trials.
+
+    With --quick, the experiment at the size its sweep block's `quick` entry gives (its
+    own scenario hash, so never mixed with the full size's trials).
 
     Example: tether sweep scenarios/silent_paper.yaml --out runs/fig5 --seeds 20
     """
     from tether.experiments.progress import progress_for
     from tether.experiments.sweep import run_sweep
+    from tether.quicksize import QUICK_SUFFIX
 
-    sc = _load(scenario, set_)
+    sc = _load(scenario, set_, quick)
+    if out_dir is None:
+        out_dir = Path(DEFAULT_SWEEP_DIR + (QUICK_SUFFIX if quick else ""))
     result = run_sweep(
         sc,
         out_dir,
@@ -167,22 +184,27 @@ def report(
 
 
 @app.command()
-def validate(scenario: ScenarioArg, set_: SetOpt = None) -> None:
+def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False) -> None:
     """Check a scenario (schema, strategy parameters, map, initial team, memory) without running.
 
     Runs exactly the checks `tether run` runs before simulating (tether.runner.build),
     and builds every combination of the `sweep:` block as `tether sweep` does, so a
-    scenario that validates is one that runs.
+    scenario that validates is one that runs. The sweep's quick size, if any, is checked
+    too (its keys and values); --quick checks the quick size as fully as the full one.
     """
     from tether.experiments.plan import check_combinations
     from tether.runfolder import check_writable
-    from tether.runner import build
+    from tether.runner import build, check_sweep, strategy_class
 
-    sc = _load(scenario, set_)
+    sc = _load(scenario, set_, quick)
     build(sc)
     n_combos = check_combinations(sc)  # every combination of the sweep block builds
+    if not quick and "quick" in sc.sweep:  # the quick size's keys and axis values
+        small = _load(scenario, set_, quick=True)
+        check_sweep(small, strategy_class(small))
     check_writable(sc.output.dir)  # where `tether run` would write (without --out)
-    swept = f", sweep of {n_combos} combinations" if n_combos else ""
+    size = ", quick size" if quick else ""
+    swept = f", sweep of {n_combos} combinations{size}" if n_combos else size
     out.print(
         f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept})",
         markup=False,

@@ -19,6 +19,18 @@ counted from the scenario's ``seed``, or an explicit list)::
       zip: [[team.n_robots, sensing.range_m]]
       seeds: 20
 
+An optional ``quick`` entry gives the experiment a *quick size* that runs in minutes
+(``tether sweep FILE --quick``): fewer seeds, shorter axes, and scenario keys set for
+the quick run only::
+
+    sweep:
+      axes: {team.n_robots: {start: 10, stop: 35, step: 5}}
+      seeds: 100
+      quick:
+        seeds: 2                          # replaces sweep.seeds
+        axes: {team.n_robots: [10, 35]}   # replaces these axes' values (axes of the sweep)
+        set: {sim.max_steps: 600}         # scenario keys of the quick run (not axes)
+
 A range ``{start, stop, step}`` or ``{start, stop, num}`` includes both ends when they
 fall on the grid. Trials are always *paired*: seed ``s`` is run on every combination,
 and since the run seed drives every random draw (initial team, scene, noise), one seed
@@ -41,7 +53,9 @@ from typing import Any
 MAX_SWEEP_COMBINATIONS = 10_000
 MAX_COMBOS = MAX_SWEEP_COMBINATIONS
 #: keys of the full form (everything else in a plain block is an axis)
-RESERVED = ("axes", "zip", "seeds")
+RESERVED = ("axes", "zip", "seeds", "quick")
+#: keys of the ``quick`` entry
+QUICK_KEYS = ("seeds", "axes", "set")
 _RANGE_KEYS = {"start", "stop", "step", "num"}
 
 
@@ -52,6 +66,25 @@ class SweepError(ValueError):
         super().__init__(f"{field}: {message}")
         self.field = field
         self.message = message
+
+
+@dataclass(frozen=True)
+class QuickSpec:
+    """The ``quick`` entry of a ``sweep:`` block: the experiment at a size that runs in minutes.
+
+    Attributes
+    ----------
+    seeds : int or list of int or None
+        Replaces the block's ``seeds`` (None: keep them).
+    axes : dict of str to Any
+        Axes of the sweep whose values the quick size replaces (as written: lists or ranges).
+    set : dict of str to Any
+        Dotted scenario keys (not axes) and their values for the quick size.
+    """
+
+    seeds: int | list[int] | None
+    axes: dict[str, Any]
+    set: dict[str, Any]
 
 
 @dataclass(frozen=True)
@@ -66,11 +99,14 @@ class SweepSpec:
         The axes in crossing order; the axes of one group are zipped (equal lengths).
     seeds : int or list of int or None
         A count of seeds, an explicit list, or None when the block names none.
+    quick : QuickSpec or None
+        The block's quick size, or None when it has none.
     """
 
     axes: dict[str, list[Any]]
     groups: list[tuple[str, ...]]
     seeds: int | list[int] | None = None
+    quick: QuickSpec | None = None
 
     def group_rows(self, group: tuple[str, ...], axes: dict[str, list[Any]] | None = None) -> list:
         """The value rows of one group: ``[{axis: value, ...}, ...]`` (zipped)."""
@@ -178,8 +214,7 @@ def _axis_values(field: str, raw: Any) -> list[Any]:
     return values
 
 
-def _parse_seeds(seeds: Any) -> int | list[int]:
-    field = "sweep.seeds"
+def _parse_seeds(seeds: Any, field: str = "sweep.seeds") -> int | list[int]:
     if isinstance(seeds, int) and not isinstance(seeds, bool):
         if seeds < 1:
             raise SweepError(field, f"a count of seeds must be >= 1 (got {seeds})")
@@ -210,7 +245,8 @@ def parse_sweep(block: dict[str, Any]) -> SweepSpec:
         if extra:
             raise SweepError(
                 f"sweep.{extra[0]}",
-                "unknown key beside 'axes'; put axes under 'axes' (allowed here: axes, zip, seeds)",
+                "unknown key beside 'axes'; put axes under 'axes' "
+                "(allowed here: axes, zip, seeds, quick)",
             )
         raw_axes = block["axes"]
         if not isinstance(raw_axes, dict) or not raw_axes:
@@ -226,18 +262,102 @@ def parse_sweep(block: dict[str, Any]) -> SweepSpec:
         axes[key] = _axis_values(f"sweep.{key}", raw)
     groups = _groups(axes, block.get("zip", []))
     seeds = _parse_seeds(block["seeds"]) if "seeds" in block else None
-    spec = SweepSpec(axes, groups, seeds)
-    if spec.n_combinations > MAX_SWEEP_COMBINATIONS:
-        raise SweepError(
-            "sweep",
-            f"the grid has {spec.n_combinations:,} combinations; at most "
-            f"{MAX_SWEEP_COMBINATIONS:,} (sweep fewer values, or split the sweep)",
-        )
+    quick = _parse_quick(block["quick"], axes, block.get("zip", [])) if "quick" in block else None
+    spec = SweepSpec(axes, groups, seeds, quick)
+    _check_size("sweep", spec)
     return spec
 
 
-def _groups(axes: dict[str, list[Any]], zipped: Any) -> list[tuple[str, ...]]:
-    field = "sweep.zip"
+def _check_size(field: str, spec: SweepSpec) -> None:
+    if spec.n_combinations > MAX_SWEEP_COMBINATIONS:
+        raise SweepError(
+            field,
+            f"the grid has {spec.n_combinations:,} combinations; at most "
+            f"{MAX_SWEEP_COMBINATIONS:,} (sweep fewer values, or split the sweep)",
+        )
+
+
+def _parse_quick(raw: Any, axes: dict[str, list[Any]], zipped: Any) -> QuickSpec:
+    """Parse the ``quick`` entry against the sweep's axes and zip groups."""
+    field = "sweep.quick"
+    if not isinstance(raw, dict) or not raw:
+        raise SweepError(
+            field,
+            "a mapping of seeds, axes and set, e.g. {seeds: 2, set: {sim.max_steps: 600}}",
+        )
+    unknown = sorted(set(map(str, raw)) - set(QUICK_KEYS))
+    if unknown:
+        raise SweepError(f"{field}.{unknown[0]}", "unknown key; allowed: seeds, axes, set")
+    seeds = _parse_seeds(raw["seeds"], f"{field}.seeds") if "seeds" in raw else None
+    quick_axes = raw.get("axes", {})
+    if not isinstance(quick_axes, dict):
+        raise SweepError(
+            f"{field}.axes", "map axes of the sweep to values, e.g. {team.n_robots: [10]}"
+        )
+    values = dict(axes)
+    for key, value in quick_axes.items():
+        if key not in axes:
+            raise SweepError(
+                f"{field}.axes.{key}",
+                f"not an axis of the sweep (axes: {', '.join(axes) or 'none'}); the quick size "
+                "only shortens axes: fix other keys under quick.set",
+            )
+        values[key] = _axis_values(f"{field}.axes.{key}", value)
+    settings = raw.get("set", {})
+    if not isinstance(settings, dict):
+        raise SweepError(
+            f"{field}.set", "map dotted scenario keys to values, e.g. {sim.max_steps: 600}"
+        )
+    for key in settings:
+        if not isinstance(key, str) or not key or not all(key.split(".")):
+            raise SweepError(f"{field}.set.{key}", "a dotted scenario key, e.g. sim.max_steps")
+        if key in axes:
+            raise SweepError(
+                f"{field}.set.{key}",
+                "is an axis of the sweep; give its quick values under quick.axes",
+            )
+        if key == "sweep" or key.startswith("sweep."):
+            raise SweepError(f"{field}.set.{key}", "the quick size cannot set the sweep block")
+    quick_spec = SweepSpec(values, _groups(values, zipped, f"{field}.axes"), seeds)
+    _check_size(field, quick_spec)
+    return QuickSpec(seeds, dict(quick_axes), dict(settings))
+
+
+def quick_block(block: dict[str, Any]) -> dict[str, Any]:
+    """The ``sweep:`` block of the quick size (full form, no ``quick`` entry).
+
+    The quick axes replace the sweep's, ``zip`` is kept and the quick ``seeds`` replace
+    the block's. The quick ``set`` is not part of the block: it changes the scenario
+    (see :func:`tether.quicksize.quick_data`).
+
+    Raises
+    ------
+    SweepError
+        The block is malformed or has no ``quick`` entry.
+    """
+    spec = parse_sweep(block)
+    if spec.quick is None:
+        raise SweepError(
+            "sweep.quick",
+            "the scenario has no quick size; add a quick entry to its sweep block "
+            "(docs/experiments.md, 'The quick size') or run it without --quick",
+        )
+    raw_axes = block["axes"] if "axes" in block else {
+        k: v for k, v in block.items() if k not in RESERVED
+    }  # fmt: skip
+    axes = {**raw_axes, **spec.quick.axes}
+    out: dict[str, Any] = {"axes": axes} if axes else {}
+    if block.get("zip"):
+        out["zip"] = block["zip"]
+    seeds = spec.quick.seeds if spec.quick.seeds is not None else block.get("seeds")
+    if seeds is not None:
+        out["seeds"] = seeds
+    return out
+
+
+def _groups(
+    axes: dict[str, list[Any]], zipped: Any, field: str = "sweep.zip"
+) -> list[tuple[str, ...]]:
     if not isinstance(zipped, list) or not all(isinstance(g, list) for g in zipped):
         raise SweepError(field, "a list of groups of axes, e.g. [[team.n_robots, sensing.range_m]]")
     group_of: dict[str, tuple[str, ...]] = {}

@@ -59,7 +59,7 @@ def _axis_figures(results: SweepResults, figures: Path) -> list[tuple[str, Path]
     out = []
     metrics = [m for m in results.metrics() if not isinstance(results.done[0].get(m), bool)]
     for axis in results.numeric_axes():
-        others = [a for a in results.axes if a != axis]
+        others = [a for a in results.shown_axes if a != axis]
         leaf = axis.rsplit(".", 1)[-1]
         for metric in metrics:
             series: dict[str, dict[float, list[float]]] = {}

@@ -17,6 +17,7 @@ import yaml
 from tether.config import sweep_label
 from tether.errors import TetherError
 from tether.experiments.store import STORE_FILE, SWEEP_SCENARIO, SWEEP_TABLE
+from tether.sweepspec import SweepError, parse_sweep, value_key
 
 __all__ = ["SweepResults", "load_results", "step_series"]
 
@@ -65,15 +66,26 @@ class SweepResults:
         """The failed trials."""
         return [r for r in self.rows if not _is_done(r)]
 
+    @property
+    def shown_axes(self) -> list[str]:
+        """The axes that name a combination: a zip group is named by its first axis.
+
+        The other axes of a group move with the first (``sensing.range_m`` with
+        ``world.scene`` in Fig. 9), so labels and figures use the first only -- unless
+        its values repeat within the group, when it alone would not tell rows apart.
+        """
+        followers = _zip_followers(self.scenario)
+        return [a for a in self.axes if a not in followers]
+
     def label(self, row: dict[str, Any], axes: list[str] | None = None) -> str:
-        """A row's combination as ``leaf=value,...`` over ``axes`` (all axes by default)."""
-        keys = self.axes if axes is None else axes
+        """A row's combination as ``leaf=value,...`` over ``axes`` (default: shown axes)."""
+        keys = self.shown_axes if axes is None else axes
         return sweep_label({k: row.get(f"param:{k}") for k in keys}) if keys else "all trials"
 
     def numeric_axes(self) -> list[str]:
-        """Axes whose finished values are all numbers, with at least two distinct values."""
+        """Shown axes whose finished values are all numbers, with two or more distinct values."""
         out = []
-        for axis in self.axes:
+        for axis in self.shown_axes:
             values = [r.get(f"param:{axis}") for r in self.done]
             numbers = all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
             if values and numbers and len(set(values)) > 1:
@@ -100,6 +112,20 @@ class SweepResults:
             if len(set(finite)) > 1:
                 out.append(key)
         return out
+
+
+def _zip_followers(scenario: dict[str, Any]) -> set[str]:
+    """The axes of the sweep's zip groups after the first, where the first tells rows apart."""
+    try:
+        spec = parse_sweep(scenario.get("sweep") or {})
+    except SweepError:
+        return set()
+    out: set[str] = set()
+    for group in spec.groups:
+        lead = [value_key(v) for v in spec.axes[group[0]]]
+        if len(group) > 1 and len(set(lead)) == len(lead):
+            out.update(group[1:])
+    return out
 
 
 def load_results(folder: str | Path) -> SweepResults:
