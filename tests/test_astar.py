@@ -296,3 +296,29 @@ def test_plan_path_on_the_town():
     straight = np.linalg.norm(goal - start)
     length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
     assert straight <= length < 1.3 * straight
+
+
+def test_a_start_in_a_pocket_cut_off_by_the_inflation_is_snapped_out():
+    """A robot close to walls may sit in free cells that the inflation isolates (a
+    bottle-shaped alcove with a narrow mouth): it must still get a path out through the
+    open mouth, while an alcove with its mouth walled stays unreachable."""
+    occ = np.zeros((60, 60), dtype=bool)  # 6 m x 6 m at 0.1 m
+    occ[20:32, 20:22] = True  # left wall, x 2.0-2.2
+    occ[20:32, 31:33] = True  # right wall, x 3.1-3.3
+    occ[31:33, 20:33] = True  # top wall, y 3.1-3.3  (rows are y)
+    occ[20:22, 20:24] = True  # bottom wall left of the mouth, x 2.0-2.4
+    occ[20:22, 28:33] = True  # bottom wall right of the mouth, x 2.8-3.3
+    grid = OccupancyGrid(occ.T.copy(), 0.1)  # axis 0 = x
+    start, goal = np.array([2.65, 2.65]), np.array([5.0, 0.5])
+    plan = planning_grid(grid, cell_m=0.5, inflate_m=0.3)
+    own = plan.to_cell(start[None])[0]
+    assert not plan.occupied[tuple(own)]  # the start's own cell is free...
+    assert astar_grid(~plan.occupied, own, plan.to_cell(goal[None])[0]) is None  # ...but cut off
+    path = plan_path(grid, start, goal, cell_m=0.5, inflate_m=0.3)
+    assert path is not None
+    np.testing.assert_array_equal(path[0], start)
+    np.testing.assert_array_equal(path[-1], goal)
+    assert grid.segments_clear(path[:-1], path[1:]).all()  # out through the mouth
+    occ[20:22, 24:28] = True  # wall the mouth: the alcove is sealed
+    sealed = OccupancyGrid(occ.T.copy(), 0.1)
+    assert plan_path(sealed, start, goal, cell_m=0.5, inflate_m=0.3) is None

@@ -271,17 +271,23 @@ def planning_grid(
 
 
 def _snap(
-    plan: OccupancyGrid, world_or_grid: World | OccupancyGrid, point: np.ndarray
+    plan: OccupancyGrid,
+    world_or_grid: World | OccupancyGrid,
+    point: np.ndarray,
+    allowed: np.ndarray | None = None,
 ) -> np.ndarray | None:
     """Free planning cell for ``point``: its own cell if free, else the nearest free one.
 
     Among free cells, the nearest centre whose straight segment from ``point`` is clear
     of obstacles (checked on the 16 nearest) is preferred; failing that, the nearest.
+    With ``allowed`` (a mask of cells, e.g. one free component), only those cells are
+    candidates and one is returned only if its segment from ``point`` is clear.
     """
     cell = plan.to_cell(point)[0]
-    if plan.inside(cell[None])[0] and not plan.occupied[tuple(cell)]:
+    mask = ~plan.occupied if allowed is None else allowed
+    if plan.inside(cell[None])[0] and mask[tuple(cell)]:
         return cell
-    free_cells = np.argwhere(~plan.occupied)
+    free_cells = np.argwhere(mask)
     if len(free_cells) == 0:
         return None
     dist = np.linalg.norm(plan.to_world(free_cells) - point, axis=1)
@@ -292,7 +298,37 @@ def _snap(
     clear = world_or_grid.segments_clear(
         np.repeat(point[None], len(near), axis=0), plan.to_world(near)
     )
-    return near[int(np.argmax(clear))] if clear.any() else near[0]
+    if clear.any():
+        return near[int(np.argmax(clear))]
+    return near[0] if allowed is None else None
+
+
+def _resnap(
+    plan: OccupancyGrid,
+    world_or_grid: World | OccupancyGrid,
+    start: np.ndarray,
+    goal: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    connectivity: str,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Start and goal cells in one free component, when their own snaps are apart.
+
+    A point close to a wall may snap into a pocket of free cells cut off by the
+    inflation (a corner, a narrow door) while the goal lies in the open: then the
+    start (else the goal) is snapped to the nearest cell of the other's component
+    that a clear straight segment reaches. A goal truly walled off stays unreachable.
+    """
+    full = connectivity == "full"
+    structure = np.ones((3,) * plan.dim) if full else ndimage.generate_binary_structure(plan.dim, 1)
+    labels, _ = ndimage.label(~plan.occupied, structure=structure)
+    if labels[tuple(a)] == labels[tuple(b)]:
+        return None  # one component already: A* failing is not the snap's doing
+    a2 = _snap(plan, world_or_grid, start, allowed=labels == labels[tuple(b)])
+    if a2 is not None:
+        return a2, b
+    b2 = _snap(plan, world_or_grid, goal, allowed=labels == labels[tuple(a)])
+    return (a, b2) if b2 is not None else None
 
 
 def plan_path(
@@ -312,7 +348,10 @@ def plan_path(
     centre), snaps ``start_m`` and ``goal_m`` to free cells (their own cell when it
     is free, else the nearest free cell, preferring one reachable by a clear straight
     segment), runs :func:`astar_grid` and returns the cell centres framed by the two
-    points. A :class:`World` without obstacles gets the straight segment.
+    points. When the two snapped cells lie in different free components (a point near a
+    wall snapped into a pocket that the inflation cut off), one is snapped again into the
+    other's component, if a clear straight segment reaches it. A :class:`World`
+    without obstacles gets the straight segment.
 
     Parameters
     ----------
@@ -369,7 +408,12 @@ def plan_path(
         return None
     cells = astar_grid(~plan.occupied, a, b, connectivity=connectivity)
     if cells is None:
-        return None
+        pair = _resnap(plan, world_or_grid, start, goal, a, b, connectivity)
+        if pair is None:
+            return None
+        cells = astar_grid(~plan.occupied, *pair, connectivity=connectivity)
+        if cells is None:
+            return None
     return _dedupe(np.concatenate([start[None], plan.to_world(cells), goal[None]]))
 
 
