@@ -105,6 +105,27 @@ def summarise(rows: list[dict], sizes: list[int]) -> dict:
     return out
 
 
+def markdown(result: dict, sizes: list[int]) -> str:
+    """The tables docs/multi_target.md quotes: medians against N, trends, completeness."""
+    out = []
+    for scene, entry in result["scenes"].items():
+        out += [f"**{scene}** ({entry['trials']} trials; every target, lambda2 > 0 and no "
+                f"collision in {entry['trials'] - len(entry['failed_trials'])})", "",
+                "| metric (median) | " + " | ".join(f"N = {n}" for n in sizes)
+                + " | Spearman rho (p) |",
+                "| --- |" + " --- |" * (len(sizes) + 1)]  # fmt: skip
+        for key, label in METRICS:
+            per = entry[key]["percentiles"]
+            cells = [f"{per[str(n)][2]:.3g}" if per.get(str(n)) else "-" for n in sizes]
+            rho, p = entry[key]["spearman_rho"], entry[key]["spearman_p"]
+            out.append(f"| {label.replace(chr(10), ' ')} | " + " | ".join(cells)
+                       + f" | {rho:+.2f} ({p:.1g}) |")  # fmt: skip
+        for f in entry["failed_trials"]:
+            out.append(f"\nFailed: N = {f['n_robots']}, seed {f['seed']}: {f['why']}.")
+        out.append("")
+    return "\n".join(out)
+
+
 def figure(result: dict, sizes: list[int], path: Path) -> None:
     fig, axes = plt.subplots(len(METRICS), len(SCENES), figsize=(11, 10), squeeze=False)
     for col, scene in enumerate(SCENES):
@@ -164,6 +185,8 @@ def main() -> None:
         print(f"{scene}: {s['trials']} trials, complete {s['complete_share']}, completion "
               f"median ratio N={a.sizes[-1]}/N={a.sizes[0]}: "
               f"{s.get('completion_median_ratio_last_first')}", flush=True)  # fmt: skip
+    result["markdown"] = markdown(result, a.sizes)
+    print(result["markdown"])
     a.out.write_text(json.dumps(result, indent=1) + "\n")
     figure(result, a.sizes, a.figure)
     print(f"wrote {a.out} and {a.figure}")
