@@ -22,7 +22,7 @@ import pyarrow.parquet as pq
 
 from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir, settings_table
 
-__all__ = ["ci95", "markdown", "run_statistics", "welch"]
+__all__ = ["ci95", "markdown", "run_statistics", "share_sum_error", "welch"]
 
 MAPS = MAP_LABELS
 SETTINGS = settings_table()
@@ -281,7 +281,22 @@ def _shares(out: Path, maps: dict[str, str]) -> list[str]:
             cells = [f"{100 * np.mean([s[f'time_{k}_frac'] for s in ss]):.0f}"
                      for k in ("moving", "relaying", "waiting", "returning")]  # fmt: skip
             lines.append(f"| {name} | {display_name(setting)} | " + " | ".join(cells) + " |")
-    return [*lines, ""] if found else []
+    if not found:
+        return []
+    n, err = share_sum_error(out)
+    lines += ["", f"The four shares sum to 1 on every one of the {n} runs with them "
+              f"(largest deviation {err:.1e})."]  # fmt: skip
+    return [*lines, ""]
+
+
+def share_sum_error(out: Path) -> tuple[int, float]:
+    """Runs under ``out/runs`` that report time shares, and the largest ``|sum - 1|``."""
+    errors = []
+    for path in sorted((Path(out) / "runs").glob("*/*/seed-*/summary.json")):
+        s = json.loads(path.read_text())
+        if all(k in s for k in SHARES):
+            errors.append(abs(sum(s[k] for k in SHARES) - 1.0))
+    return len(errors), max(errors, default=0.0)
 
 
 if __name__ == "__main__":
