@@ -170,9 +170,41 @@ def markdown(out_dir: str | Path) -> str:
         fig5.append(f"| {name}, explored at 300 steps [%] | " + " | ".join(at300) + " |")
         fig5.append(f"| {name}, explored at 900 steps [%] | " + " | ".join(at900) + " |")
         fig6.append(f"| {name} [steps per robot, of 900] | " + " | ".join(ooc) + " |")
+    fig5 += _plans_row(out, maps) + _anova(out, maps)
     parts = ["### Fig. 4", "", *lines, "", "### Fig. 5", "", *fig5, "", "### Fig. 6", "", *fig6, ""]
     parts += _comparison(out, maps) + _binding(out, maps) + _shares(out, maps)
     return "\n".join(parts)
+
+
+def _plans_row(out: Path, maps: dict[str, str]) -> list[str]:
+    """Plans per run and mean plan time of every theta: range over runs and maps."""
+    cells = []
+    for setting in FIG5:
+        ss = [s for m in maps for s in _summaries(_runs(out, m, setting))]
+        if setting.startswith("utility") or not ss:
+            cells.append("-")
+            continue
+        n = [s.get("plans", 0) for s in ss]
+        t = [s.get("planning_time_mean_s", 0.0) for s in ss]
+        cells.append(f"{min(n)}-{max(n)} / {min(t):.2f}-{max(t):.2f}")
+    label = "APX plans per run / mean plan time [s] (range over runs and maps)"
+    return [f"| {label} | " + " | ".join(cells) + " |"]
+
+
+def _anova(out: Path, maps: dict[str, str]) -> list[str]:
+    """theta = 1 against theta = 12 at the end: one-way ANOVA p-value per map."""
+    from scipy.stats import f_oneway
+
+    found = []
+    for m, name in maps.items():
+        a, b = (_summaries(_runs(out, m, s)) for s in ("theta1", "theta12"))
+        if len(a) > 1 and len(b) > 1:
+            fa, fb = ([100 * s["final_explored_fraction"] for s in x] for x in (a, b))
+            diff = np.mean(fa) - np.mean(fb)
+            found.append(f"{name} {diff:+.1f} points, p = {f_oneway(fa, fb).pvalue:.2g}")
+    if not found:
+        return []
+    return ["", "theta = 1 against theta = 12 at the end (one-way ANOVA): " + "; ".join(found)]
 
 
 def _ci(values: list[float], fmt: str = "{:.1f}") -> str:
