@@ -271,6 +271,7 @@ def _binding(out: Path, maps: dict[str, str]) -> list[str]:
         "| --- | --- | --- | --- | --- | --- |",
     ]
     found = False
+    paired: list[float] = []  # assigned - frontiers, run by run (same seed, same BS)
     for m, name in maps.items():
         finals = {}
         for rule in ("assigned", "frontiers"):
@@ -292,6 +293,15 @@ def _binding(out: Path, maps: dict[str, str]) -> list[str]:
             d, half, p = welch(finals["assigned"], finals["frontiers"])
             lines.append(f"| {name} | difference | {d:+.1f} [{d - half:+.1f}, {d + half:+.1f}] "
                          f"(p = {p:.2g}) | | | |")  # fmt: skip
+        if len(finals) == 2 and len(finals["assigned"]) == len(finals["frontiers"]):
+            paired += [a - b for a, b in zip(finals["assigned"], finals["frontiers"], strict=True)]
+    if len(paired) > 1:
+        from scipy.stats import ttest_1samp
+
+        mu, half = ci95(paired)
+        p = float(ttest_1samp(paired, 0.0).pvalue)
+        cell = f"{mu:+.1f} [{mu - half:+.1f}, {mu + half:+.1f}] (p = {p:.2g})"
+        lines.append(f"| all maps | paired by BS position ({len(paired)} pairs) | {cell} | | | |")
     return [*lines, ""] if found else []
 
 
