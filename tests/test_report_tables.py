@@ -64,5 +64,9 @@ def test_comparison_tables_from_a_tiny_report(tmp_path: Path) -> None:
     cell = f"{mu:.1f}" if half is None else f"{mu:.1f} [{mu - half:.1f}, {mu + half:.1f}]"
     assert f"| tiny | θ = 1 | **{cell}** |" in table
     assert "| tiny | θ = 1 − Utility (none) |" in table
+    assert "sum to 1 on every one of the 8 runs" in table  # 4 settings x 2 runs
+    assert "| all maps | paired by BS position (2 pairs) |" in table  # 2 seeds, 1 map
+    plans = [json.loads((r / "summary.json").read_text())["plans"] for r in runs]
+    assert f"| {min(plans)}-{max(plans)} / " in table  # theta = 1's plans per run, range
     for fig in ("fig5.png", "fig6.png", "fig_time.png"):
         assert (tmp_path / "out" / fig).exists()

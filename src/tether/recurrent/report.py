@@ -8,7 +8,10 @@ the BS position, on the Cluttered (``grass``), Office (``offices``) and Open
   planning time in simulation steps, (b) instantaneous planning;
 * Fig. 5: explored area known at the BS over time for ``theta`` in
   {1, 3, 6, 9, 12} and the Utility baseline (``r = 0.5``);
-* Fig. 6: time robots spend out of communication with the BS.
+* Fig. 6: time robots spend out of communication with the BS;
+* issue 13: theta = 1 against Utility with and without coordination, the relay
+  binding both ways, and where the robots' time goes (``fig_time.png``); the
+  tables with 95 % confidence intervals come from :mod:`.report_tables`.
 
 This is a long experiment (benchmark-like), not a test::
 
@@ -109,7 +112,10 @@ def make_report(
         Replanning thresholds for Figs. 5-6.
     settings
         Subset of settings to run (default all: ``apx/ilp_t12_timed``,
-        ``apx/ilp_t12_instant``, ``theta<k>``, ``utility``).
+        ``apx/ilp_t12_instant``, ``theta<k>``, ``theta1_assigned`` and
+        ``theta1_frontiers`` (the relay binding both ways), ``utility_greedy`` and
+        ``utility_none`` (Utility's coordination both ways); ``theta1`` and
+        ``utility`` are the defaults' runs, see :mod:`.report_settings`).
     maps_dir
         Where the maps are (default ``../shared/maps`` next to the repository).
     workers

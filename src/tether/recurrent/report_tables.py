@@ -22,7 +22,7 @@ import pyarrow.parquet as pq
 
 from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir, settings_table
 
-__all__ = ["ci95", "markdown", "run_statistics", "welch"]
+__all__ = ["ci95", "markdown", "run_statistics", "share_sum_error", "welch"]
 
 MAPS = MAP_LABELS
 SETTINGS = settings_table()
@@ -170,9 +170,41 @@ def markdown(out_dir: str | Path) -> str:
         fig5.append(f"| {name}, explored at 300 steps [%] | " + " | ".join(at300) + " |")
         fig5.append(f"| {name}, explored at 900 steps [%] | " + " | ".join(at900) + " |")
         fig6.append(f"| {name} [steps per robot, of 900] | " + " | ".join(ooc) + " |")
+    fig5 += _plans_row(out, maps) + _anova(out, maps)
     parts = ["### Fig. 4", "", *lines, "", "### Fig. 5", "", *fig5, "", "### Fig. 6", "", *fig6, ""]
     parts += _comparison(out, maps) + _binding(out, maps) + _shares(out, maps)
     return "\n".join(parts)
+
+
+def _plans_row(out: Path, maps: dict[str, str]) -> list[str]:
+    """Plans per run and mean plan time of every theta: range over runs and maps."""
+    cells = []
+    for setting in FIG5:
+        ss = [s for m in maps for s in _summaries(_runs(out, m, setting))]
+        if setting.startswith("utility") or not ss:
+            cells.append("-")
+            continue
+        n = [s.get("plans", 0) for s in ss]
+        t = [s.get("planning_time_mean_s", 0.0) for s in ss]
+        cells.append(f"{min(n)}-{max(n)} / {min(t):.2f}-{max(t):.2f}")
+    label = "APX plans per run / mean plan time [s] (range over runs and maps)"
+    return [f"| {label} | " + " | ".join(cells) + " |"]
+
+
+def _anova(out: Path, maps: dict[str, str]) -> list[str]:
+    """theta = 1 against theta = 12 at the end: one-way ANOVA p-value per map."""
+    from scipy.stats import f_oneway
+
+    found = []
+    for m, name in maps.items():
+        a, b = (_summaries(_runs(out, m, s)) for s in ("theta1", "theta12"))
+        if len(a) > 1 and len(b) > 1:
+            fa, fb = ([100 * s["final_explored_fraction"] for s in x] for x in (a, b))
+            diff = np.mean(fa) - np.mean(fb)
+            found.append(f"{name} {diff:+.1f} points, p = {f_oneway(fa, fb).pvalue:.2g}")
+    if not found:
+        return []
+    return ["", "theta = 1 against theta = 12 at the end (one-way ANOVA): " + "; ".join(found)]
 
 
 def _ci(values: list[float], fmt: str = "{:.1f}") -> str:
@@ -239,6 +271,7 @@ def _binding(out: Path, maps: dict[str, str]) -> list[str]:
         "| --- | --- | --- | --- | --- | --- |",
     ]
     found = False
+    paired: list[float] = []  # assigned - frontiers, run by run (same seed, same BS)
     for m, name in maps.items():
         finals = {}
         for rule in ("assigned", "frontiers"):
@@ -260,6 +293,15 @@ def _binding(out: Path, maps: dict[str, str]) -> list[str]:
             d, half, p = welch(finals["assigned"], finals["frontiers"])
             lines.append(f"| {name} | difference | {d:+.1f} [{d - half:+.1f}, {d + half:+.1f}] "
                          f"(p = {p:.2g}) | | | |")  # fmt: skip
+        if len(finals) == 2 and len(finals["assigned"]) == len(finals["frontiers"]):
+            paired += [a - b for a, b in zip(finals["assigned"], finals["frontiers"], strict=True)]
+    if len(paired) > 1:
+        from scipy.stats import ttest_1samp
+
+        mu, half = ci95(paired)
+        p = float(ttest_1samp(paired, 0.0).pvalue)
+        cell = f"{mu:+.1f} [{mu - half:+.1f}, {mu + half:+.1f}] (p = {p:.2g})"
+        lines.append(f"| all maps | paired by BS position ({len(paired)} pairs) | {cell} | | | |")
     return [*lines, ""] if found else []
 
 
@@ -281,7 +323,22 @@ def _shares(out: Path, maps: dict[str, str]) -> list[str]:
             cells = [f"{100 * np.mean([s[f'time_{k}_frac'] for s in ss]):.0f}"
                      for k in ("moving", "relaying", "waiting", "returning")]  # fmt: skip
             lines.append(f"| {name} | {display_name(setting)} | " + " | ".join(cells) + " |")
-    return [*lines, ""] if found else []
+    if not found:
+        return []
+    n, err = share_sum_error(out)
+    lines += ["", f"The four shares sum to 1 on every one of the {n} runs with them "
+              f"(largest deviation {err:.1e})."]  # fmt: skip
+    return [*lines, ""]
+
+
+def share_sum_error(out: Path) -> tuple[int, float]:
+    """Runs under ``out/runs`` that report time shares, and the largest ``|sum - 1|``."""
+    errors = []
+    for path in sorted((Path(out) / "runs").glob("*/*/seed-*/summary.json")):
+        s = json.loads(path.read_text())
+        if all(k in s for k in SHARES):
+            errors.append(abs(sum(s[k] for k in SHARES) - 1.0))
+    return len(errors), max(errors, default=0.0)
 
 
 if __name__ == "__main__":
