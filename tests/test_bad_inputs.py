@@ -395,6 +395,11 @@ CASES: dict[str, Case] = {
     "recurrent: NaN speed": Case(
         "strategy.params.speed_m_s", _set("strategy.params.speed_m_s", float("nan")), base=recurrent
     ),
+    "recurrent: more random failures than robots": Case(
+        "strategy.params.failures.random",
+        _set("strategy.params.failures", {"random": 99}),
+        base=recurrent,
+    ),
     "recurrent: all-black map": Case("world", _recurrent_map(np.zeros((40, 60))), base=recurrent),
     "recurrent: 1x1 map": Case("world", _recurrent_map(np.full((1, 1), 255)), base=recurrent),
     "recurrent: range 1e308": Case(

@@ -232,7 +232,12 @@ def failure_schedule(
             raise ValueError(f"failures.at_s: no robot {r} in a team of {n_robots}")
         out[int(r)] = max(int(round(t / dt_s)), 1)
     others = [r for r in range(n_robots) if r not in out]
-    k = min(params.random, len(others))
+    if params.random > len(others):
+        raise ValueError(
+            f"failures.random: {params.random} robots cannot fail at random in a team of "
+            f"{n_robots} ({len(out)} fail at given times); use at most {len(others)}"
+        )
+    k = params.random
     if k:
         lo, hi = params.window_s if params.window_s is not None else (dt_s, steps * dt_s)
         lo_step, hi_step = max(int(round(lo / dt_s)), 1), max(int(round(hi / dt_s)), 1)
