@@ -90,6 +90,11 @@ def summarise(rows: list[dict], sizes: list[int]) -> dict:
         for r, f in zip(rows, failed, strict=True) if f
     ]  # fmt: skip
     n = np.array([r["param:team.n_robots"] for r in rows])
+    wall = np.array([r["wall_time_s"] or np.nan for r in rows], dtype=float)
+    sim = np.array([r["sim_time_s"] or np.nan for r in rows], dtype=float)
+    out["trial_wall_s_total"] = float(np.nansum(wall))  # CPU-bound: one core per trial
+    out["sim_over_wall_median"] = {str(size): float(np.nanmedian(sim[n == size] / wall[n == size]))
+                                   for size in sizes if (n == size).any()}  # fmt: skip
     for key, _ in METRICS:
         vals = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
         per = {}
@@ -120,9 +125,20 @@ def markdown(result: dict, sizes: list[int]) -> str:
             rho, p = entry[key]["spearman_rho"], entry[key]["spearman_p"]
             out.append(f"| {label.replace(chr(10), ' ')} | " + " | ".join(cells)
                        + f" | {rho:+.2f} ({p:.1g}) |")  # fmt: skip
+        speed = entry.get("sim_over_wall_median", {})
+        out.append("| simulated / wall time (one core per trial) | "
+                   + " | ".join(f"{speed[str(n)]:.1f}x" if str(n) in speed else "-" for n in sizes)
+                   + " | |")  # fmt: skip
         for f in entry["failed_trials"]:
             out.append(f"\nFailed: N = {f['n_robots']}, seed {f['seed']}: {f['why']}.")
         out.append("")
+    scenes = result["scenes"].values()
+    trials = sum(e["trials"] for e in scenes)
+    total = sum(e["trial_wall_s_total"] for e in scenes)
+    if trials:
+        out.append(f"All scenes: {trials} trials, {total:,.0f} trial-seconds "
+                   f"({total / trials:.0f} s per trial); 1,800 trials on 2 cores at that "
+                   f"rate: {1800 * total / trials / 2 / 3600:.1f} h.")  # fmt: skip
     return "\n".join(out)
 
 
