@@ -4,8 +4,8 @@
   checks of ``tether validate``; at the quick size every combination builds;
 * ``continuous_fig9.yaml`` (one zipped sweep) gives, trial by trial, the scenarios of the
   three per-scene files the running campaign reads; ``silent_fig5.yaml`` is
-  ``silent_paper.yaml``; the recurrent files are the settings of
-  ``python -m tether.recurrent.report``.
+  ``silent_paper.yaml``; the trials of ``python -m tether.recurrent.report`` are the
+  recurrent files' combinations (it derives them from the files).
 
 Cost: building the quick combinations of ``continuous_fig9.yaml`` builds the town and the
 office (3-D scenes), the slowest part (about 15 s on a loaded 2-core machine).
@@ -22,7 +22,7 @@ from tether.config import load_scenario, scenario_from_dict
 from tether.experiments.plan import check_combinations, seeds_of, trial_scenario
 from tether.quicksize import load_scenario_at
 from tether.recurrent.report import trial_scenario as report_trial_scenario
-from tether.recurrent.report_settings import settings_table
+from tether.recurrent.report_settings import run_dir, settings_table
 from tether.runner import check_sweep, strategy_class
 from tether.sweepspec import parse_sweep
 
@@ -108,23 +108,26 @@ def test_silent_fig5_is_silent_paper():
     assert ours.seed == paper.seed
 
 
-def _report_setting(path: Path, strategy: str, combo: dict) -> dict:
-    """The recurrent report's scenario of the setting a paper-file combination is."""
+def _report_scenarios(name: str, maps_dir: Path) -> dict[tuple[str, str], dict]:
+    """The report's scenario of every (map, label) taken from paper file ``name``."""
     table = settings_table()
-    if strategy == "utility":
-        setting = table["utility"]
-    elif "strategy.params.theta" in combo:
-        setting = table[f"theta{combo['strategy.params.theta']}"]
-    else:
-        timed = "timed" if combo["strategy.params.count_planning_time"] else "instant"
-        setting = table[f"{combo['strategy.params.method']}_t12_{timed}"]
-    return report_trial_scenario(path, setting, steps=900, n_robots=12)
+    return {
+        (m, label): report_trial_scenario(maps_dir / f"{m}.png", setting, steps=900, n_robots=12)
+        for m in ("grass", "offices", "open")
+        for label, setting in table.items()
+        if setting.file == Path(name).stem
+    }
 
 
 @pytest.mark.parametrize(
     "name", ["recurrent_fig4.yaml", "recurrent_fig5_6.yaml", "recurrent_fig5_6_utility.yaml"]
 )
-def test_recurrent_files_are_the_report_settings(name, monkeypatch, skip_without_shared_map):
+def test_the_report_trials_are_the_paper_combinations(name, monkeypatch, skip_without_shared_map):
+    """Each combination of the file is one report setting per map, value for value.
+
+    The report's own labels (no variant) are exactly the file's combinations; the
+    report only names them ``recurrent-report-<map>`` and gives the map's absolute path.
+    """
     monkeypatch.chdir(ROOT)
     scenario = load_scenario(PAPER / name)
     skip_without_shared_map(scenario)
@@ -132,18 +135,46 @@ def test_recurrent_files_are_the_report_settings(name, monkeypatch, skip_without
     assert seeds_of(scenario) == [0, 1, 2, 3, 4]  # the report's runs 0..4 (the BS position)
     maps = [Path(p).stem for p in spec.axes["world.params.path"]]
     assert maps == ["grass", "offices", "open"]
+    maps_dir = scenario.resolve_path(spec.axes["world.params.path"][0]).parent
+    table = settings_table()
+    report = _report_scenarios(name, maps_dir)
+    own = {k: v for k, v in report.items() if not table[k[1]].variant}
+    paper = []
     for combo in spec.combinations():
-        ours = trial_scenario(scenario, combo)
-        map_path = ours.resolve_path(combo["world.params.path"])
-        report = _report_setting(map_path, ours.strategy.name, combo)
-        report_sc = scenario_from_dict(report, "report", ours.base_dir)
-        a, b = ours.model_dump(mode="json"), report_sc.model_dump(mode="json")
-        a["world"]["params"]["path"] = b["world"]["params"]["path"]  # relative vs absolute
-        for key in ("world", "team", "sensing", "sim"):
-            assert a[key] == b[key], (name, combo, key)
-        assert ours.strategy.name == report_sc.strategy.name
-        got = {k: a["strategy"]["params"][k] for k in b["strategy"]["params"]}
-        assert got == b["strategy"]["params"], (name, combo)
+        data = trial_scenario(scenario, combo).model_dump(mode="json")
+        path = data["world"]["params"]["path"]
+        data["world"]["params"]["path"] = str(scenario.resolve_path(path).resolve())
+        paper.append(_computed(data))
+    ours = [_computed(scenario_from_dict(d, "report", ROOT).model_dump(mode="json"))
+            for d in own.values()]  # fmt: skip
+    assert len(ours) == len(paper) == spec.n_combinations
+    assert all(p in ours for p in paper) and all(o in paper for o in ours)
+    for (m, _), data in report.items():
+        assert data["name"] == f"recurrent-report-{m}" and data["seed"] == scenario.seed
+
+
+def test_variants_change_one_value_and_same_runs_are_same_scenarios(
+    monkeypatch, skip_without_shared_map
+):
+    """``theta1_frontiers`` and ``utility_none`` are theta1 and utility with one value changed;
+    labels share a run folder exactly when their scenarios are equal."""
+    monkeypatch.chdir(ROOT)
+    scenario = load_scenario(PAPER / "recurrent_fig5_6.yaml")
+    skip_without_shared_map(scenario)
+    maps_dir = scenario.resolve_path(scenario.world.params["path"]).parent
+    table = settings_table()
+    report = {}
+    for name in ("recurrent_fig4.yaml", "recurrent_fig5_6.yaml", "recurrent_fig5_6_utility.yaml"):
+        report.update({k[1]: v for k, v in _report_scenarios(name, maps_dir).items()
+                       if k[0] == "grass"})  # fmt: skip
+    assert set(report) == set(table)
+    for label, base in (("theta1_frontiers", "theta1"), ("utility_none", "utility")):
+        a, b = report[label]["strategy"]["params"], report[base]["strategy"]["params"]
+        assert {k for k in a if a[k] != b[k]} == {k.split(".")[-1] for k in table[label].variant}
+    for a in table:
+        for b in table:
+            same_folder = run_dir(Path("o"), "m", a, 0) == run_dir(Path("o"), "m", b, 0)
+            assert same_folder == (report[a] == report[b]), (a, b)
 
 
 def test_package_data_ships_the_paper_files():

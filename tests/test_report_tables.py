@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tether.recurrent.report_settings import run_dir, settings_table
+from tether.recurrent.report_settings import run_dir
 from tether.recurrent.report_tables import ci95, markdown, welch
 
 
@@ -28,10 +28,10 @@ def test_ci95_and_welch_by_hand() -> None:
 
 
 def test_theta1_is_the_default_binding_run() -> None:
-    table = settings_table()
-    assert run_dir(Path("o"), "m", "theta1", table, 0).parent.name == "theta1_assigned"
-    assert run_dir(Path("o"), "m", "utility", table, 0).parent.name == "utility_greedy"
-    assert run_dir(Path("o"), "m", "apx_t12_instant", table, 0).parent.name == "theta12"
+    assert run_dir(Path("o"), "m", "theta1", 0).parent.name == "theta1_assigned"
+    assert run_dir(Path("o"), "m", "utility", 0).parent.name == "utility_greedy"
+    assert run_dir(Path("o"), "m", "apx_t12_instant", 0).parent.name == "theta12"
+    assert run_dir(Path("o"), "m", "theta3", 2) == Path("o/runs/m/theta3/seed-2")
 
 
 def test_comparison_tables_from_a_tiny_report(tmp_path: Path) -> None:

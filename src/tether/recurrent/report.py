@@ -17,7 +17,11 @@ This is a long experiment (benchmark-like), not a test::
 
     python -m tether.recurrent.report OUT_DIR --runs 5 --steps 900
 
-Every run is a trial of :mod:`tether.experiments` (a run folder under
+The settings live in the paper campaign files ``scenarios/paper/recurrent_fig4.yaml``,
+``recurrent_fig5_6.yaml`` and ``recurrent_fig5_6_utility.yaml``: each trial is a
+combination of one of their sweeps (:mod:`.report_settings` says which), at the
+report's map folder, team size and steps. Every run is a trial of
+:mod:`tether.experiments` (a run folder under
 ``OUT_DIR/runs/<map>/<setting>/seed-<k>``, seed ``k`` placing the BS as
 ``tether run scenarios/recurrent_<map>.yaml --seed k`` does); finished runs
 are reused when the report is run again, like every sweep. Figures go to ``OUT_DIR/fig4_<map>.png``,
@@ -35,47 +39,71 @@ from typing import Any
 
 import numpy as np
 
+from tether.config import Scenario, load_scenario, set_dotted, sweep_spec
 from tether.experiments.executors import Trial
+from tether.experiments.plan import trial_scenario as plan_trial_scenario
 from tether.experiments.sweep import run_trials
-from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir, settings_table
+from tether.recurrent.report_settings import (
+    MAP_LABELS,
+    Setting,
+    display_name,
+    run_dir,
+    settings_table,
+)
 from tether.recurrent.report_tables import run_statistics
 from tether.runfolder import machine
 
-__all__ = ["make_report", "trial_scenario"]
+__all__ = ["combination", "make_report", "paper_scenario", "trial_scenario"]
 
 MAPS_DIR = Path(__file__).resolve().parents[3] / ".." / "shared" / "maps"
+#: the paper campaign files the settings come from (:mod:`.report_settings` names them)
+PAPER_DIR = Path(__file__).resolve().parents[1] / "scenarios" / "paper"
+_MISSING = object()
+
+
+def paper_scenario(name: str) -> Scenario:
+    """The paper campaign ``scenarios/paper/<name>.yaml`` (its sweep still in it)."""
+    return load_scenario(PAPER_DIR / f"{name}.yaml")
+
+
+def combination(base: Scenario, map_name: str, pick: dict[str, Any]) -> dict[str, Any]:
+    """The combination of ``base``'s sweep for map ``map_name`` with the values of ``pick``.
+
+    A map that is not on the file's ``world.params.path`` axis (a test map) takes the
+    combination of the axis' first map; :func:`trial_scenario` replaces the path anyway.
+    """
+    combos = [c for c in sweep_spec(base).combinations()
+              if all(c.get(k, _MISSING) == v for k, v in pick.items())]  # fmt: skip
+    on_map = [c for c in combos if Path(c["world.params.path"]).stem == map_name]
+    if not combos or len(on_map) > 1:
+        found = "no" if not combos else "more than one"
+        raise ValueError(f"{base.source}: {found} combination of the sweep has {pick}")
+    return (on_map or combos)[0]
 
 
 def trial_scenario(
-    map_path: Path, setting: dict[str, Any], steps: int, n_robots: int, check: bool = False
+    map_path: Path, setting: Setting, steps: int, n_robots: int, check: bool = False
 ) -> dict[str, Any]:
-    """The scenario of one setting on one map (the paper's Sec. VII-A at 0.1 m per cell)."""
-    if setting["kind"] == "utility":
-        strategy: dict[str, Any] = {
-            "name": "utility",
-            "params": {"ratio": 0.5, "coordination": setting["coordination"]},
-        }
-    else:
-        # Fig. 4's ILP runs had a 60 s limit per plan (none was reached)
-        strategy = {
-            "name": "recurrent",
-            "params": {"theta": setting["theta"], "method": setting["method"], "delta": 4,
-                       "count_planning_time": setting["timed"], "check": check,
-                       "relay_binding": setting["binding"], "time_limit_s": 60.0},
-        }  # fmt: skip
-    return {
-        "name": f"recurrent-report-{map_path.stem}",
-        "seed": 0,
-        # black (0) is an obstacle, anything else free (../shared/maps/README.md)
-        "world": {"scene": "map", "dim": 2, "params": {
-            "path": str(map_path.resolve()), "resolution_m": 0.1,
-            "occupied_thresh": 0.999, "free_thresh": 0.998}},
-        "team": {"n_robots": n_robots},
-        "sensing": {"range_m": 5.0},
-        "sim": {"dt_s": 1.0, "max_steps": steps},
-        "strategy": strategy,
-        "output": {"record_every": 1, "figures": False},
-    }  # fmt: skip
+    """The scenario of one setting on one map: its paper file's combination, report-sized.
+
+    The combination (:func:`combination`) applied by
+    :func:`tether.experiments.plan.trial_scenario`, then the setting's variant values,
+    the map file, the team size, the steps and ``check`` (recurrent strategy only);
+    named ``recurrent-report-<map>`` with no description. The run seed is the trial's.
+    """
+    base = paper_scenario(setting.file)
+    data = plan_trial_scenario(base, combination(base, map_path.stem, setting.pick)).model_dump(
+        mode="json"
+    )
+    data["name"] = f"recurrent-report-{map_path.stem}"
+    data["description"] = ""
+    values = {**setting.variant, "world.params.path": str(map_path.resolve()),
+              "team.n_robots": n_robots, "sim.max_steps": steps}  # fmt: skip
+    if "check" in data["strategy"]["params"]:
+        values["strategy.params.check"] = check
+    for key, value in values.items():
+        set_dotted(data, key, value)
+    return data
 
 
 def _curve(run_dir: Path) -> np.ndarray:
@@ -115,7 +143,8 @@ def make_report(
         ``apx/ilp_t12_instant``, ``theta<k>``, ``theta1_assigned`` and
         ``theta1_frontiers`` (the relay binding both ways), ``utility_greedy`` and
         ``utility_none`` (Utility's coordination both ways); ``theta1`` and
-        ``utility`` are the defaults' runs, see :mod:`.report_settings`).
+        ``utility`` are the defaults' runs, see :mod:`.report_settings`). ``theta<k>``
+        needs ``k`` on the ``strategy.params.theta`` axis of ``recurrent_fig5_6.yaml``.
     maps_dir
         Where the maps are (default ``../shared/maps`` next to the repository).
     workers
@@ -131,6 +160,7 @@ def make_report(
     chosen = {k: v for k, v in all_settings.items() if settings is None or k in settings}
     trials: list[Trial] = []
     keys: dict[str, list[tuple[str, str, int]]] = {}  # run folder -> (map, label, k)
+    scenarios: dict[str, dict[str, Any]] = {}  # run folder -> its scenario
     for m in maps:
         map_path = mdir / f"{m}.png"
         if not map_path.exists():
@@ -138,8 +168,12 @@ def make_report(
         for label, setting in chosen.items():
             data = trial_scenario(map_path, setting, steps, n_robots, check)
             for k in range(runs):
-                folder = str(run_dir(out, m, label, all_settings, k))
-                if folder not in keys:  # identical settings share their runs
+                folder = str(run_dir(out, m, label, k))
+                if scenarios.setdefault(folder, data) != data:
+                    raise ValueError(
+                        f"{label}: its scenario is not that of {folder}, which it shares"
+                    )
+                if folder not in keys:  # labels of one scenario share their runs
                     trials.append(Trial(data, f"report:{m}/{label}", str(mdir), k, folder))
                 keys.setdefault(folder, []).append((m, label, k))
     summaries: dict[tuple[str, str, int], dict[str, Any]] = {}
@@ -188,7 +222,7 @@ def make_report(
     for m, entry in old.get("maps", {}).items():
         report["maps"].setdefault(m, entry)
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-    _figures(out, maps, chosen, runs, thetas, all_settings)
+    _figures(out, maps, chosen, runs, thetas)
     return report
 
 
@@ -198,7 +232,6 @@ def _figures(
     chosen: dict[str, Any],
     runs: int,
     thetas: tuple[int, ...],
-    all_settings: dict[str, dict[str, Any]],
 ) -> None:
     import matplotlib
 
@@ -206,7 +239,7 @@ def _figures(
     import matplotlib.pyplot as plt
 
     def mean_curve(m: str, label: str) -> tuple[np.ndarray, np.ndarray]:
-        curves = np.array([_curve(run_dir(out, m, label, all_settings, k)) for k in range(runs)])
+        curves = np.array([_curve(run_dir(out, m, label, k)) for k in range(runs)])
         return 100 * curves.mean(axis=0), 100 * curves.std(axis=0)
 
     def band(ax: Any, m: str, label: str, name: str) -> None:

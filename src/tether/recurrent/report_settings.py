@@ -1,22 +1,26 @@
-"""The settings of the recurrent-connectivity report and where their runs live.
+"""The settings of the recurrent-connectivity report: labels, paper files and run folders.
 
 Shared by :mod:`tether.recurrent.report` (which runs them) and
 :mod:`tether.recurrent.report_tables` (which prints the doc tables from the run
-folders). A setting is a small dict; settings with identical dicts share one set of
-run folders, named after the *last* label that has that dict, so spelled-out labels
-(``theta1_assigned``, ``utility_greedy``) name the folders and the short ones
-(``theta1``, ``utility``: the defaults) reuse them.
+folders). The values of a setting live in the paper campaign files
+(``scenarios/paper/recurrent_*.yaml``); a label here only says which file and which
+combination of its ``sweep:`` axes it is (:class:`Setting`), plus, for the issue-13
+variants, the one value the label spells out. Labels with the same scenario share one
+set of run folders (:data:`SAME_RUNS`): the spelled-out labels (``theta1_assigned``,
+``utility_greedy``) name the folders and the short ones (``theta1``, ``utility``: the
+files' defaults) reuse them.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 __all__ = [
-    "DEFAULT_BINDING",
-    "DEFAULT_COORDINATION",
     "MAP_LABELS",
+    "SAME_RUNS",
+    "Setting",
     "display_name",
     "run_dir",
     "settings_table",
@@ -24,44 +28,56 @@ __all__ = [
 
 MAP_LABELS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
 
-#: the defaults of the registered strategies, spelled out so a run folder's setting is explicit
-DEFAULT_BINDING = "assigned"
-DEFAULT_COORDINATION = "greedy"
+#: the paper files (``scenarios/paper/<name>.yaml``) the settings come from
+FIG4, FIG5_6, UTILITY = "recurrent_fig4", "recurrent_fig5_6", "recurrent_fig5_6_utility"
+
+#: labels whose scenario is another label's: they share its run folders (the report checks)
+SAME_RUNS = {"apx_t12_instant": "theta12", "theta1": "theta1_assigned", "utility": "utility_greedy"}
 
 
-def settings_table(thetas: tuple[int, ...] = (1, 3, 6, 9, 12)) -> dict[str, dict[str, Any]]:
+@dataclass(frozen=True)
+class Setting:
+    """One setting: a combination of a paper file's sweep, and the values a variant sets.
+
+    ``pick`` gives the values of the file's axes other than the map
+    (``world.params.path``) that select the combination; ``variant`` the dotted keys
+    set on top of it (the issue-13 variants the paper files do not sweep).
+    """
+
+    file: str
+    pick: dict[str, Any] = field(default_factory=dict)
+    variant: dict[str, Any] = field(default_factory=dict)
+
+
+def settings_table(thetas: tuple[int, ...] = (1, 3, 6, 9, 12)) -> dict[str, Setting]:
     """Every setting by label (Fig. 4, Figs. 5-6, relay binding, Utility both ways)."""
-
-    def rec(theta: int, method: str, timed: bool, binding: str = DEFAULT_BINDING) -> dict:
-        return {"kind": "recurrent", "theta": theta, "method": method, "timed": timed,
-                "binding": binding}  # fmt: skip
-
-    out: dict[str, dict[str, Any]] = {
-        "apx_t12_timed": rec(12, "apx", True),
-        "ilp_t12_timed": rec(12, "ilp", True),
-        "apx_t12_instant": rec(12, "apx", False),
-        "ilp_t12_instant": rec(12, "ilp", False),
-    }
+    out: dict[str, Setting] = {}
+    for mode, timed in (("timed", True), ("instant", False)):
+        for method in ("apx", "ilp"):
+            pick = {"strategy.params.method": method, "strategy.params.count_planning_time": timed}
+            out[f"{method}_t12_{mode}"] = Setting(FIG4, pick)
     for th in thetas:
-        out[f"theta{th}"] = rec(th, "apx", False)
+        out[f"theta{th}"] = Setting(FIG5_6, {"strategy.params.theta": th})
     # relay binding both ways at theta = 1 (the measurement behind the default)
     for binding in ("assigned", "frontiers"):
-        out[f"theta1_{binding}"] = rec(1, "apx", False, binding)
-    out["utility"] = {"kind": "utility", "coordination": DEFAULT_COORDINATION}
+        variant = {"strategy.params.relay_binding": binding}
+        out[f"theta1_{binding}"] = Setting(FIG5_6, {"strategy.params.theta": 1}, variant)
+    out["utility"] = Setting(UTILITY)
     for coordination in ("greedy", "none"):
-        out[f"utility_{coordination}"] = {"kind": "utility", "coordination": coordination}
+        variant = {"strategy.params.coordination": coordination}
+        out[f"utility_{coordination}"] = Setting(UTILITY, {}, variant)
     return out
 
 
-def run_dir(out: Path, m: str, label: str, settings: dict[str, dict[str, Any]], k: int) -> Path:
-    """Run folder of ``label`` on map ``m``, seed ``k``; identical settings share it.
+def run_dir(out: Path, m: str, label: str, k: int) -> Path:
+    """Run folder of ``label`` on map ``m``, seed ``k``; labels of one scenario share it.
 
     ``apx_t12_instant`` (Fig. 4b) and ``theta12`` (Figs. 5-6) are the same
-    setting; with the same seed the simulation is deterministic, so it runs once
-    (under ``theta12``); ``theta1`` runs under ``theta1_<default binding>``.
+    scenario; with the same seed the simulation is deterministic, so it runs once
+    (under ``theta12``); ``theta1`` runs under ``theta1_assigned`` and ``utility``
+    under ``utility_greedy`` (:data:`SAME_RUNS`).
     """
-    same = [name for name, s in settings.items() if s == settings[label]]
-    return Path(out) / "runs" / m / same[-1] / f"seed-{k}"
+    return Path(out) / "runs" / m / SAME_RUNS.get(label, label) / f"seed-{k}"
 
 
 def display_name(label: str) -> str:

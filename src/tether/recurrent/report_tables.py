@@ -20,12 +20,11 @@ import numpy as np
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir, settings_table
+from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir
 
 __all__ = ["ci95", "markdown", "run_statistics", "share_sum_error", "welch"]
 
 MAPS = MAP_LABELS
-SETTINGS = settings_table()
 FIG4 = {
     "apx_t12_timed": "APX, (a) planning time counted",
     "ilp_t12_timed": "ILP, (a) planning time counted",
@@ -37,8 +36,8 @@ COMPARED = ("theta1", "utility_greedy", "utility_none")
 
 
 def _runs(out: Path, m: str, setting: str) -> list[Path]:
-    folder = run_dir(out, m, setting, SETTINGS, 0).parent if setting in SETTINGS else None
-    if folder is None or not folder.exists():
+    folder = run_dir(out, m, setting, 0).parent
+    if not folder.exists():
         folder = out / "runs" / m / setting
     return sorted(p for p in folder.glob("seed-*") if (p / "summary.json").exists())
 
