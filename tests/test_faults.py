@@ -122,7 +122,9 @@ def test_failure_schedule() -> None:
         np.random.default_rng(0),
     )
     assert again == sched  # a function of the seed
-    assert failure_schedule(FailureParams(random=9), 4, 100, 1.0, rng).keys() == {0, 1, 2, 3}
+    assert failure_schedule(FailureParams(random=4), 4, 100, 1.0, rng).keys() == {0, 1, 2, 3}
+    with pytest.raises(ValueError, match="9 robots cannot fail at random in a team of 4"):
+        failure_schedule(FailureParams(random=9), 4, 100, 1.0, rng)  # refused, not capped
     with pytest.raises(ValueError, match="no robot 7"):
         failure_schedule(FailureParams(at_s={7: 1.0}), 4, 100, 1.0, rng)
 
