@@ -182,3 +182,17 @@ def test_package_data_ships_the_paper_files():
     assert '"scenarios/paper/*.yaml"' in text
     for name in FILES:
         assert yaml.safe_load((PAPER / name).read_text())["sweep"]["quick"]
+
+
+def test_campaigns_load_by_name_from_any_folder(tmp_path, monkeypatch):
+    """``paper/<name>`` reaches the shipped file from anywhere (a pip-installed user has
+    no ``scenarios/`` folder), and ``tether list`` names every campaign."""
+    from tether.config import paper_campaigns
+
+    monkeypatch.chdir(tmp_path)
+    assert set(paper_campaigns()) == {f"paper/{p.stem}" for p in PAPER.glob("*.yaml")}
+    by_name = load_scenario("paper/silent_fig5")
+    by_path = load_scenario(PAPER / "silent_fig5.yaml")
+    assert by_name.model_dump() == by_path.model_dump()
+    with pytest.raises(Exception, match="paper/nope: file not found"):
+        load_scenario("paper/nope")

@@ -215,11 +215,13 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
 @app.command("list")
 def list_() -> None:
     """List built-in scenarios, strategies and scenes."""
-    from tether.config import builtin_scenarios
+    from tether.config import builtin_scenarios, paper_campaigns
     from tether.plugins import load_builtins
 
     names = load_builtins()
     out.print("scenarios:   " + ", ".join(builtin_scenarios()), markup=False)
+    out.print("campaigns:   " + ", ".join(paper_campaigns()) + "  (tether sweep NAME [--quick])",
+              markup=False)  # fmt: skip
     out.print("strategies:  " + ", ".join(names["strategies"]), markup=False)
     out.print("scenes:      " + ", ".join(names["scenes"]), markup=False)
     out.print("link models: " + ", ".join(names["link models"]), markup=False)

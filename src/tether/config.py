@@ -245,6 +245,12 @@ def builtin_scenarios() -> list[str]:
     return sorted(f.name[:-5] for f in files if f.name.endswith(".yaml"))
 
 
+def paper_campaigns() -> list[str]:
+    """Names of the papers' campaigns shipped with tether: ``paper/<name>`` (sweep files)."""
+    files = (resources.files(BUILTIN_PACKAGE) / "paper").iterdir()
+    return sorted(f"paper/{f.name[:-5]}" for f in files if f.name.endswith(".yaml"))
+
+
 def _yaml_problem(exc: yaml.YAMLError) -> str:
     """A YAML parser error in one line: where and what."""
     mark = getattr(exc, "problem_mark", None)
@@ -333,7 +339,8 @@ def _read_yaml(path: Path, label: str) -> dict[str, Any]:
         if str(label).lower() in ("true", "false", "yes", "no", "0", "1"):
             hint = " (flags such as --no-figures take no value)"
         raise ScenarioError(
-            f"{label}: file not found; give a scenario file or a built-in name ({names}){hint}"
+            f"{label}: file not found; give a scenario file or a built-in name ({names}, "
+            f"or a paper campaign: `tether list`){hint}"
         ) from None
     except IsADirectoryError:
         raise ScenarioError(f"{label}: is a folder; give a scenario YAML file") from None
@@ -423,8 +430,11 @@ def read_scenario_data(path_or_name: str | Path) -> tuple[dict[str, Any], str, P
     except (OSError, ValueError) as exc:  # a name too long, a NUL byte
         raise ScenarioError(f"{text[:80]!r}: not a usable file name ({exc})") from None
     bare_name = not text.endswith((".yaml", ".yml")) and "/" not in text
-    if not exists and bare_name and text in builtin_scenarios():
-        ref = resources.files(BUILTIN_PACKAGE) / f"{text}.yaml"
+    campaign = not exists and text.startswith("paper/") and text in paper_campaigns()
+    if (not exists and bare_name and text in builtin_scenarios()) or campaign:
+        ref = resources.files(BUILTIN_PACKAGE)
+        for part in f"{text}.yaml".split("/"):
+            ref = ref / part
         with resources.as_file(ref) as real:
             return _read_yaml(real, text), text, real.parent
     return _read_yaml(path, text), text, path.parent
