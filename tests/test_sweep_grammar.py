@@ -11,7 +11,7 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
-from tether import cli
+from _cli import tether as _tether
 from tether.config import load_scenario, scenario_from_dict
 from tether.experiments.plan import combo_id, trials_of
 from tether.sweepspec import SweepError, canonical, combo_hash, expand_range, parse_sweep
@@ -23,16 +23,6 @@ def _data(sweep: dict, steps: int = 4) -> dict:
     data["output"]["figures"] = False
     data["sweep"] = sweep
     return data
-
-
-def _tether(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 # ----------------------------------------------------------------------------- parsing

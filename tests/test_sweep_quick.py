@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
-from tether import cli
+from _cli import tether as _tether
 from tether.config import load_scenario
 from tether.quicksize import load_scenario_at, quick_data
 from tether.sweepspec import SweepError, parse_sweep, quick_block
@@ -38,16 +38,6 @@ def _write(tmp_path: Path, block: dict, name: str = "s.yaml") -> Path:
     path = tmp_path / name
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     return path
-
-
-def _tether(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def _with_quick(**quick) -> dict:

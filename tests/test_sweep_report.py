@@ -9,19 +9,9 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from tether import cli
+from _cli import tether as _tether
 from tether.config import load_scenario, scenario_from_dict
 from tether.experiments.sweep import run_sweep
-
-
-def _tether(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
-from tether import cli
+from _cli import tether as _tether
 from tether.config import load_scenario, scenario_from_dict
 from tether.experiments.store import STORE_FILE, scenario_hash
 from tether.experiments.sweep import run_sweep
@@ -33,16 +33,6 @@ def _data(steps: int = 6, sweep: dict | None = None) -> dict:
 
 def _by_id(table: Path) -> dict[str, dict]:
     return {r["trial_id"]: r for r in pq.read_table(table).to_pylist()}
-
-
-def _tether(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def test_resume_after_kill_9_loses_no_trial_and_redoes_none(tmp_path):
