@@ -43,6 +43,7 @@ KERNEL_MODULES = (
     "graph/kernels.py",
     "recurrent/planning/steiner_kernels.py",
     "silent/steering_kernels.py",
+    "sensing/robots_kernels.py",
 )
 
 _forced: bool | None = None
