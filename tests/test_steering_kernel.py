@@ -13,7 +13,7 @@ import pytest
 
 from tether import jit
 from tether.sensing import SensorModel, sense
-from tether.silent.steering import constrained_steps
+from tether.silent.steering import constrained_steps, desired_steps
 
 pytest.importorskip("numba")
 
@@ -40,3 +40,19 @@ def test_kernel_matches_reference(seed: int, dim: int) -> None:
             with jit.using(True):
                 fast = constrained_steps(desired, obs.measured, observer, **kw)
             np.testing.assert_allclose(fast, ref, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("dim", [2, 3])
+def test_desired_distance_kernel_is_bit_identical(seed: int, dim: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 60))
+    pos = rng.uniform(0.0, 30.0, (n, dim))
+    sensor = SensorModel(15.0, body_radius_m=0.5, radial_error_m=0.45,
+                         angular_error_rad=np.radians(12))  # fmt: skip
+    obs = sense(pos, sensor, rng)
+    with jit.using(False):
+        ref = desired_steps(obs.measured, obs.observer(), n, gamma=0.3, d0_m=7.0)
+    with jit.using(True):
+        fast = desired_steps(obs.measured, obs.observer(), n, gamma=0.3, d0_m=7.0)
+    np.testing.assert_array_equal(fast, ref)

@@ -70,8 +70,17 @@ def desired_steps(
     ``desired_distance`` (13): ``x = 2 gamma sum_k (||x_k|| - d0) x_k / ||x_k||`` (15).
     ``farthest`` (12): ``J = max_k ||x - x_k||``, whose gradient at ``x = 0`` gives
     ``x = gamma x_f / ||x_f||`` towards the farthest sensed robot ``f``.
-    Robots that sense nobody get a zero step.
+    Robots that sense nobody get a zero step. For cost (13), with the compiled kernels
+    (:func:`_use_kernel`), :func:`tether.silent.steering_kernels.desired_distance_kernel`
+    adds the same terms in the same order (bit-identical).
     """
+    if cost == "desired_distance" and _use_kernel(n) and measured.ndim == 2:
+        from tether.silent.steering_kernels import desired_distance_kernel
+
+        return desired_distance_kernel(
+            np.ascontiguousarray(measured, dtype=float),
+            np.asarray(observer, dtype=np.int64), int(n), float(gamma), float(d0_m),
+        )  # fmt: skip
     dist = np.linalg.norm(measured, axis=1)
     direction = unit(measured)
     if cost == "desired_distance":

@@ -74,17 +74,33 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
         last = hi if search else lo
         for cand in range(lo - 1, last):  # lo - 1: the desired direction, then each robot
             u = ud if cand < lo else mu[cand]
+            dot = 0.0
+            for c in range(dim):
+                dot += u[c] * ud[c]
+            # pruning (search only): progress = allowed * dot with allowed >= 0 only
+            # shrinking over k, so a candidate that cannot beat the best is skipped
+            # exactly (ties keep the earlier one anyway); best_progress >= 0 after the
+            # desired direction, so dot <= 0 can never win
+            if (
+                search
+                and best_progress >= 0.0
+                and (dot <= 0.0 or min(length, max_step) * dot <= best_progress)
+            ):
+                continue
             b = np.inf
             for k in range(lo, hi):
                 b = min(b, _bound(u, mu[k], dist[k], d_m, r_err, ang, min_sep))
+                if (
+                    search
+                    and best_progress >= 0.0
+                    and min(min(length, b), max_step) * dot <= best_progress
+                ):
+                    break
             allowed = min(min(length, b), max_step)
             if not search:
                 for c in range(dim):
                     steps[i, c] = u[c] * allowed
                 break
-            dot = 0.0
-            for c in range(dim):
-                dot += u[c] * ud[c]
             progress = allowed * dot
             if progress > best_progress:  # ties keep the earlier candidate
                 best_k, best_allowed, best_progress = cand, allowed, progress
@@ -95,6 +111,26 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
     return steps
 
 
+@njit(cache=True)
+def desired_distance_kernel(measured, observer, n, gamma, d0_m):  # noqa: ANN001, ANN201
+    """:func:`~tether.silent.steering.desired_steps` for cost (13): eq. (15) summed per robot.
+
+    The same terms ``2 gamma (||x_k|| - d0) x_k / ||x_k||`` added in measurement order
+    as ``np.add.at`` adds them, so the sums are bit-identical.
+    """
+    m, dim = measured.shape
+    out = np.zeros((n, dim))
+    u = np.empty(dim)
+    scale = 2.0 * gamma
+    for q in range(m):
+        dist = _norm_unit(measured[q], u)
+        f = scale * (dist - d0_m)
+        o = observer[q]
+        for c in range(dim):
+            out[o, c] += f * u[c]
+    return out
+
+
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernel for 2-D and 3-D teams."""
     for dim in (2, 3):
@@ -103,3 +139,4 @@ def warm_up() -> None:
         indptr = np.array([0, 1, 2], np.int64)
         for search in (False, True):
             constrained_steps_kernel(desired, measured, indptr, 15.0, 0.4, 0.2, 0.5, np.inf, search)
+        desired_distance_kernel(measured, indptr[:-1].copy(), 2, 0.2, 8.0)
