@@ -5,7 +5,18 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
+
+
+def _clip(x: float, lo: float, hi: float) -> float:
+    """``float(np.clip(x, lo, hi))`` for one number, without numpy's call overhead.
+
+    ``np.clip`` is ``minimum(maximum(x, lo), hi)``; so is this (NaN stays NaN).
+    """
+    x = float(x)
+    return x if x != x else min(max(x, lo), hi)
 
 
 @dataclass
@@ -45,10 +56,11 @@ class Polyline:
 
     def at(self, s_m: float) -> np.ndarray:
         """Point at arc length ``s_m`` (clamped to the path)."""
-        s = float(np.clip(s_m, 0.0, self.length_m))
+        s = _clip(s_m, 0.0, self.length_m)
         if len(self.waypoints) == 1 or self.length_m == 0.0:
             return self.waypoints[0].copy()
-        k = int(np.clip(np.searchsorted(self._cum, s, side="right") - 1, 0, len(self._seg_len) - 1))
+        k = int(np.searchsorted(self._cum, s, side="right")) - 1
+        k = min(max(k, 0), len(self._seg_len) - 1)
         frac = (s - self._cum[k]) / max(self._seg_len[k], 1e-12)
         return self.waypoints[k] + frac * (self.waypoints[k + 1] - self.waypoints[k])
 
@@ -61,9 +73,10 @@ class Polyline:
                 continue
             ab = b - a
             denom = float(ab @ ab)
-            t = 0.0 if denom == 0 else float(np.clip((point - a) @ ab / denom, 0.0, 1.0))
-            s = float(np.clip(s0 + t * (s1 - s0), s_min, s_min + window_m))
-            d = float(np.linalg.norm(self.at(s) - point))
+            t = 0.0 if denom == 0 else _clip((point - a) @ ab / denom, 0.0, 1.0)
+            s = _clip(s0 + t * (s1 - s0), s_min, s_min + window_m)
+            gap = self.at(s) - point
+            d = math.sqrt(gap.dot(gap))  # np.linalg.norm of a vector: sqrt(x.dot(x))
             if d < best_d:
                 best_s, best_d = s, d
         return best_s
