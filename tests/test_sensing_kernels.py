@@ -16,6 +16,8 @@ from tether import jit
 from tether.graph import pairs_within
 from tether.sensing import SensorModel, sense
 from tether.sensing.robots import _occluded
+from tether.world.grid import OccupancyGrid
+from tether.world.world import World
 
 pytest.importorskip("numba")
 
@@ -69,3 +71,22 @@ def test_sense_kernels_on_degenerate_teams() -> None:
         np.testing.assert_array_equal(fast.pairs, ref.pairs)
         np.testing.assert_array_equal(fast.indptr, ref.indptr)
         np.testing.assert_array_equal(fast.measured, ref.measured)
+
+
+@pytest.mark.parametrize("noise", ["uniform", "bound"])
+def test_large_team_and_obstacles_take_the_split_path_bit_identically(noise: str) -> None:
+    rng = np.random.default_rng(5)
+    big = rng.uniform(0.0, 120.0, (400, 2))  # above KERNEL_PAIRS_MAX_N: k-d tree + kernels
+    occ = np.zeros((40, 40), dtype=bool)
+    occ[20, 0:30] = True  # a wall: line of sight first, then occlusion and CSR kernels
+    walled = World(dim=2, grid=OccupancyGrid(occ, 1.0))
+    small = rng.uniform(0.5, 39.5, (40, 2))
+    sensor = SensorModel(15.0, body_radius_m=1.0, radial_error_m=0.3,
+                         angular_error_rad=0.1, noise=noise)  # fmt: skip
+    for pos, world in ((big, None), (small, walled)):
+        with jit.using(False):
+            ref = sense(pos, sensor, np.random.default_rng(9), world)
+        with jit.using(True):
+            fast = sense(pos, sensor, np.random.default_rng(9), world)
+        for name in ("pairs", "indptr", "target", "measured", "true_relative"):
+            np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name), name)

@@ -31,6 +31,7 @@ import numpy as np
 from tether import jit
 from tether.geometry import random_perpendicular, unit
 from tether.graph import expand_rows, pairs_within
+from tether.graph.structure import KERNEL_PAIRS_MAX_N
 from tether.world.world import World
 
 NoiseKind = Literal["none", "uniform", "bound"]
@@ -190,8 +191,18 @@ def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np
     return rotated * np.maximum(dist + e_r, 0.0)[:, None]
 
 
+#: ``rng.choice([-1.0, 1.0], size=k)`` is ``_SIGNS[rng.integers(0, 2, size=k)]``: the
+#: same draws (numpy's ``Generator.choice`` with replacement and no ``p`` draws
+#: ``integers(0, len(a), size)``; tests compare both paths bit for bit) without
+#: ``choice``'s argument checks
+_SIGNS = np.array([-1.0, 1.0])
+
+
 def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
-    """:func:`_noisy` with the arithmetic compiled: the same draws, in the same order."""
+    """:func:`_noisy` with the arithmetic compiled: the same draws, in the same order.
+
+    ``cos``/``sin`` of the angular errors stay numpy's (so the values are the same).
+    """
     if sensor.noise == "none" or len(rel) == 0:
         return rel.copy()
     k, dim = rel.shape
@@ -199,10 +210,10 @@ def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generat
         e_r = rng.uniform(-sensor.radial_error_m, sensor.radial_error_m, size=k)
         e_a = rng.uniform(-sensor.angular_error_rad, sensor.angular_error_rad, size=k)
     else:
-        e_r = sensor.radial_error_m * rng.choice([-1.0, 1.0], size=k)
-        e_a = sensor.angular_error_rad * rng.choice([-1.0, 1.0], size=k)
+        e_r = sensor.radial_error_m * _SIGNS[rng.integers(0, 2, size=k)]
+        e_a = sensor.angular_error_rad * _SIGNS[rng.integers(0, 2, size=k)]
     if dim == 2:  # random_perpendicular's draws
-        sign, normal = rng.choice([-1.0, 1.0], size=k), np.empty((0, dim))
+        sign, normal = _SIGNS[rng.integers(0, 2, size=k)], np.empty((0, dim))
     else:
         sign, normal = np.empty(0), rng.normal(size=(k, dim))
     from tether.sensing.robots_kernels import noise_kernel
@@ -241,14 +252,21 @@ def sense(
     """Sense the team: the interaction graph and every robot's noisy measurements."""
     positions = np.ascontiguousarray(positions, dtype=float)
     n = len(positions)
-    pairs = sensed_pairs(positions, sensor, world)
     if _use_kernel(n) and positions.ndim == 2 and positions.shape[1] in (2, 3):
-        from tether.sensing.robots_kernels import directed_kernel
+        from tether.sensing import robots_kernels as kernels
 
-        directed, indptr, rel = directed_kernel(pairs.astype(np.int64), positions, n)
+        if n <= KERNEL_PAIRS_MAX_N and (world is None or not world.has_obstacles):
+            radius = float(sensor.body_radius_m) if sensor.occlusion else 0.0
+            pairs, directed, indptr, rel = kernels.sense_pairs_kernel(
+                positions, float(sensor.range_m), radius
+            )
+        else:
+            pairs = sensed_pairs(positions, sensor, world)
+            directed, indptr, rel = kernels.directed_kernel(pairs.astype(np.int64), positions, n)
         indptr = indptr.astype(np.intp)
         measured = _noisy_compiled(rel, sensor, rng)
     else:
+        pairs = sensed_pairs(positions, sensor, world)
         directed, indptr, rel = _directed(pairs, positions, n)
         measured = _noisy(rel, sensor, rng)
     return Observation(

@@ -10,6 +10,9 @@ Three kernels, each the arithmetic of its reference, term for term:
   arrays of ``sum_i deg_i^2`` candidates;
 * :func:`directed_kernel` -- :func:`~tether.sensing.robots._directed`: both directions
   of every pair sorted by (observer, target) with a counting sort and relatives;
+* :func:`sense_pairs_kernel` -- for small teams in free space, the three steps before
+  the noise in one call (range by :func:`~tether.graph.kernels.pairs_within_kernel`,
+  occlusion, CSR): numba's dispatch costs microseconds per call and argument;
 * :func:`noise_kernel` -- the arithmetic of :func:`~tether.sensing.robots._noisy`
   (bounded radial and angular errors, the paper's Fig. 1) once its random numbers are
   drawn: the caller draws them with numpy's ``Generator`` in the reference's order and
@@ -26,6 +29,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from tether.graph.kernels import pairs_within_kernel
 
 EPS = 1e-12  # tether.geometry.unit's default
 
@@ -137,6 +142,27 @@ def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
+def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN201
+    """Sensed pairs (no obstacles; occlusion if ``body_radius_m > 0``), then ``_directed``.
+
+    Returns ``(pairs, directed, indptr, rel)`` as :func:`~tether.sensing.robots.sense`
+    builds them; all pairs are tested (teams of up to a few hundred robots).
+    """
+    n = positions.shape[0]
+    pairs = pairs_within_kernel(positions, range_m)
+    if body_radius_m > 0 and len(pairs):
+        hidden = occluded_kernel(positions, pairs, body_radius_m)
+        keep = 0
+        for p in range(len(pairs)):
+            if not hidden[p]:
+                pairs[keep, 0], pairs[keep, 1] = pairs[p, 0], pairs[p, 1]
+                keep += 1
+        pairs = pairs[:keep].copy()
+    directed, indptr, rel = directed_kernel(pairs, positions, n)
+    return pairs, directed, indptr, rel
+
+
+@njit(cache=True)
 def _unit_row(v, out):  # noqa: ANN001, ANN202
     """``out = unit(v)`` as :func:`tether.geometry.unit`; returns ``||v||``."""
     s = 0.0
@@ -190,6 +216,7 @@ def warm_up() -> None:
         pos = np.eye(3, dim) * 2.0
         pairs = np.array([[0, 1], [0, 2], [1, 2]], np.int64)
         occluded_kernel(pos, pairs, 0.5)
+        sense_pairs_kernel(pos, 3.0, 0.5)
         _, _, rel = directed_kernel(pairs, pos, 3)
         k = len(rel)
         noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), np.ones(k), np.ones((k, dim)))
