@@ -182,6 +182,7 @@ def constrained_steps(
     min_separation_m: float = 0.0,
     max_step_m: float = np.inf,
     search_directions: bool = False,
+    indptr: np.ndarray | None = None,
 ) -> np.ndarray:
     """Steps that satisfy (1), (2) and the speed limit, as close to ``desired`` as allowed.
 
@@ -198,10 +199,14 @@ def constrained_steps(
     With :func:`tether.jit.enabled` (and measurements grouped by observer, as an
     :class:`~tether.sensing.Observation` holds them), the compiled
     :mod:`tether.silent.steering_kernels` computes the same steps robot by robot.
+    ``indptr``: the observation's CSR row pointers (``observer`` grouped by robot) if the
+    caller has them, so they are not rebuilt.
     """
     n = len(desired)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
-    if _use_kernel(n) and (len(observer) < 2 or (np.diff(observer) >= 0).all()):
+    grouped = indptr is not None  # an Observation's CSR: measurements grouped by observer
+    if indptr is None:
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
+    if _use_kernel(n) and (grouped or len(observer) < 2 or (np.diff(observer) >= 0).all()):
         from tether.silent.steering_kernels import constrained_steps_kernel
 
         return constrained_steps_kernel(

@@ -274,6 +274,7 @@ class SilentStrategy(Strategy):
             min_separation_m=self.min_separation_m,
             max_step_m=max_step,
             search_directions=self.search_directions,
+            indptr=obs.indptr,
         )
         steps = self._avoid_obstacles(state.positions, steps)
         wanted = float(np.linalg.norm(desired[leader]))
