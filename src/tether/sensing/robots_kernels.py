@@ -72,32 +72,53 @@ def _neighbours(n, pairs):  # noqa: ANN001, ANN202
 
 @njit(cache=True)
 def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
-    """Per pair: a third robot's body hides the pair (``_occluded``'s test exactly)."""
+    """Per pair: a third robot's body hides the pair (``_occluded``'s test exactly).
+
+    Each robot's neighbours are sorted by their squared distance (the value the test
+    computes), so the scan of pair ``(i, k)`` stops at the first neighbour no closer
+    to ``i`` than ``k``: the test ``|ij|^2 < |ik|^2`` fails for every later one.
+    """
     n, dim = positions.shape
     m = len(pairs)
     out = np.zeros(m, np.bool_)
     if m == 0 or body_radius_m <= 0:
         return out
     indptr, nbr = _neighbours(n, pairs)
-    r2 = body_radius_m**2
+    d2 = np.empty(len(nbr))
     ik = np.empty(dim)
     ij = np.empty(dim)
+    for i in range(n):
+        lo, hi = indptr[i], indptr[i + 1]
+        for e in range(lo, hi):
+            for c in range(dim):
+                ij[c] = positions[nbr[e], c] - positions[i, c]
+            d2[e] = _einsum_dot(ij, ij)
+        for e in range(lo + 1, hi):  # insertion sort by squared distance
+            j, dj = nbr[e], d2[e]
+            f = e
+            while f > lo and d2[f - 1] > dj:
+                nbr[f], d2[f] = nbr[f - 1], d2[f - 1]
+                f -= 1
+            nbr[f], d2[f] = j, dj
+    r2 = body_radius_m**2
     for p in range(m):
         i, k = pairs[p, 0], pairs[p, 1]
         for c in range(dim):
             ik[c] = positions[k, c] - positions[i, c]
         d2_ik = _einsum_dot(ik, ik)
         for e in range(indptr[i], indptr[i + 1]):
+            d2_ij = d2[e]
+            if not d2_ij < d2_ik:
+                break
             j = nbr[e]
             if j == k:
                 continue
             for c in range(dim):
                 ij[c] = positions[j, c] - positions[i, c]
-            d2_ij = _einsum_dot(ij, ij)
             proj = _einsum_dot(ij, ik)
             d2_kj = d2_ik - 2.0 * proj + d2_ij
             perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
-            if d2_ij < d2_ik and d2_kj < d2_ik and perp2 < r2:
+            if d2_kj < d2_ik and perp2 < r2:
                 out[p] = True
                 break
     return out
