@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -44,6 +45,12 @@ class Polyline:
         seg = np.diff(self.waypoints, axis=0)
         self._seg_len = np.linalg.norm(seg, axis=1)
         self._cum = np.concatenate([[0.0], np.cumsum(self._seg_len)])
+        # per-segment values the leader's carrot needs every step, computed once (the
+        # same expressions as before, so the same bits): b - a, |b - a|^2, arc lengths
+        self._seg = seg
+        self._denom = [float(ab @ ab) for ab in seg]
+        self._cum_list = self._cum.tolist()
+        self._seg_len_list = self._seg_len.tolist()
 
     @property
     def length_m(self) -> float:
@@ -58,20 +65,20 @@ class Polyline:
         s = _clip(s_m, 0.0, self.length_m)
         if len(self.waypoints) == 1 or self.length_m == 0.0:
             return self.waypoints[0].copy()
-        k = int(np.searchsorted(self._cum, s, side="right")) - 1
-        k = min(max(k, 0), len(self._seg_len) - 1)
-        frac = (s - self._cum[k]) / max(self._seg_len[k], 1e-12)
-        return self.waypoints[k] + frac * (self.waypoints[k + 1] - self.waypoints[k])
+        k = bisect.bisect_right(self._cum_list, s) - 1  # np.searchsorted(side="right")
+        k = min(max(k, 0), len(self._seg_len_list) - 1)
+        frac = (s - self._cum_list[k]) / max(self._seg_len_list[k], 1e-12)
+        return self.waypoints[k] + frac * self._seg[k]
 
     def project(self, point: np.ndarray, s_min: float = 0.0, window_m: float = np.inf) -> float:
         """Arc length of the path point closest to ``point`` in ``[s_min, s_min + window_m]``."""
         best_s, best_d = s_min, np.inf
-        for k, (a, b) in enumerate(zip(self.waypoints[:-1], self.waypoints[1:], strict=True)):
-            s0, s1 = self._cum[k], self._cum[k + 1]
+        cum = self._cum_list
+        for k in range(len(self._denom)):
+            s0, s1 = cum[k], cum[k + 1]
             if s1 < s_min or s0 > s_min + window_m:
                 continue
-            ab = b - a
-            denom = float(ab @ ab)
+            a, ab, denom = self.waypoints[k], self._seg[k], self._denom[k]
             t = 0.0 if denom == 0 else _clip((point - a) @ ab / denom, 0.0, 1.0)
             s = _clip(s0 + t * (s1 - s0), s_min, s_min + window_m)
             gap = self.at(s) - point
