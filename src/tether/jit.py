@@ -41,8 +41,10 @@ KERNEL_MODULES = (
     "world/clearance_kernels.py",
     "world/los_kernels.py",
     "graph/kernels.py",
+    "graph/grid_kernels.py",
     "recurrent/planning/steiner_kernels.py",
     "silent/steering_kernels.py",
+    "sensing/robots_kernels.py",
 )
 
 _forced: bool | None = None

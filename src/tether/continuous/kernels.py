@@ -431,6 +431,12 @@ def warm_up() -> float:
     from tether.silent.steering_kernels import warm_up as steering_warm_up
 
     steering_warm_up()
+    from tether.sensing.robots_kernels import warm_up as sensing_warm_up
+
+    sensing_warm_up()
+    from tether.graph.grid_kernels import warm_up as grid_warm_up
+
+    grid_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds

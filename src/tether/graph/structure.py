@@ -23,7 +23,8 @@ def pairs_within(positions: np.ndarray, range_m: float) -> np.ndarray:
 
     Uses a k-d tree, so the cost is ``O(n log n + m)`` rather than all-pairs; small
     teams are tested pair by pair when compiled kernels are loaded
-    (:func:`tether.graph.kernels.pairs_within_kernel`, the same squared-distance test).
+    (:func:`tether.graph.kernels.pairs_within_kernel`, the same squared-distance test),
+    larger ones through a cell grid (:mod:`tether.graph.grid_kernels`, the same test).
     """
     positions = np.asarray(positions, dtype=float)
     if len(positions) < 2:
@@ -32,6 +33,12 @@ def pairs_within(positions: np.ndarray, range_m: float) -> np.ndarray:
         from tether.graph.kernels import pairs_within_kernel
 
         return pairs_within_kernel(np.ascontiguousarray(positions), float(range_m))
+    if jit.warm() and len(positions) > KERNEL_PAIRS_MAX_N and positions.shape[1] in (2, 3):
+        from tether.graph.grid_kernels import grid_shape, pairs_within_grid_kernel
+
+        ncell = grid_shape(positions, float(range_m))
+        if ncell is not None:
+            return pairs_within_grid_kernel(np.ascontiguousarray(positions), float(range_m), ncell)
     tree = cKDTree(positions)
     pairs = tree.query_pairs(r=float(range_m), output_type="ndarray")
     if len(pairs) == 0:

@@ -2,10 +2,21 @@
 
 from __future__ import annotations
 
+import bisect
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+
+def _clip(x: float, lo: float, hi: float) -> float:
+    """``float(np.clip(x, lo, hi))`` for one number, without numpy's call overhead.
+
+    ``np.clip`` is ``minimum(maximum(x, lo), hi)``; so is this (NaN stays NaN).
+    """
+    x = float(x)
+    return x if x != x else min(max(x, lo), hi)
 
 
 @dataclass
@@ -34,6 +45,12 @@ class Polyline:
         seg = np.diff(self.waypoints, axis=0)
         self._seg_len = np.linalg.norm(seg, axis=1)
         self._cum = np.concatenate([[0.0], np.cumsum(self._seg_len)])
+        # per-segment values the leader's carrot needs every step, computed once (the
+        # same expressions as before, so the same bits): b - a, |b - a|^2, arc lengths
+        self._seg = seg
+        self._denom = [float(ab @ ab) for ab in seg]
+        self._cum_list = self._cum.tolist()
+        self._seg_len_list = self._seg_len.tolist()
 
     @property
     def length_m(self) -> float:
@@ -45,25 +62,27 @@ class Polyline:
 
     def at(self, s_m: float) -> np.ndarray:
         """Point at arc length ``s_m`` (clamped to the path)."""
-        s = float(np.clip(s_m, 0.0, self.length_m))
+        s = _clip(s_m, 0.0, self.length_m)
         if len(self.waypoints) == 1 or self.length_m == 0.0:
             return self.waypoints[0].copy()
-        k = int(np.clip(np.searchsorted(self._cum, s, side="right") - 1, 0, len(self._seg_len) - 1))
-        frac = (s - self._cum[k]) / max(self._seg_len[k], 1e-12)
-        return self.waypoints[k] + frac * (self.waypoints[k + 1] - self.waypoints[k])
+        k = bisect.bisect_right(self._cum_list, s) - 1  # np.searchsorted(side="right")
+        k = min(max(k, 0), len(self._seg_len_list) - 1)
+        frac = (s - self._cum_list[k]) / max(self._seg_len_list[k], 1e-12)
+        return self.waypoints[k] + frac * self._seg[k]
 
     def project(self, point: np.ndarray, s_min: float = 0.0, window_m: float = np.inf) -> float:
         """Arc length of the path point closest to ``point`` in ``[s_min, s_min + window_m]``."""
         best_s, best_d = s_min, np.inf
-        for k, (a, b) in enumerate(zip(self.waypoints[:-1], self.waypoints[1:], strict=True)):
-            s0, s1 = self._cum[k], self._cum[k + 1]
+        cum = self._cum_list
+        for k in range(len(self._denom)):
+            s0, s1 = cum[k], cum[k + 1]
             if s1 < s_min or s0 > s_min + window_m:
                 continue
-            ab = b - a
-            denom = float(ab @ ab)
-            t = 0.0 if denom == 0 else float(np.clip((point - a) @ ab / denom, 0.0, 1.0))
-            s = float(np.clip(s0 + t * (s1 - s0), s_min, s_min + window_m))
-            d = float(np.linalg.norm(self.at(s) - point))
+            a, ab, denom = self.waypoints[k], self._seg[k], self._denom[k]
+            t = 0.0 if denom == 0 else _clip((point - a) @ ab / denom, 0.0, 1.0)
+            s = _clip(s0 + t * (s1 - s0), s_min, s_min + window_m)
+            gap = self.at(s) - point
+            d = math.sqrt(gap.dot(gap))  # np.linalg.norm of a vector: sqrt(x.dot(x))
             if d < best_d:
                 best_s, best_d = s, d
         return best_s

@@ -28,11 +28,25 @@ from typing import Literal
 
 import numpy as np
 
+from tether import jit
 from tether.geometry import random_perpendicular, unit
 from tether.graph import expand_rows, pairs_within
+from tether.graph.structure import KERNEL_PAIRS_MAX_N
 from tether.world.world import World
 
 NoiseKind = Literal["none", "uniform", "bound"]
+
+#: below this many robots the sensing kernels run only if numba is loaded already (or
+#: TETHER_JIT=on): loading numba (about a second) would cost a short small-team run more
+#: than the kernels save (as :data:`tether.silent.steering.KERNEL_MIN_ROBOTS`)
+KERNEL_MIN_ROBOTS = 200
+
+
+def _use_kernel(n: int) -> bool:
+    """Whether :func:`sense` runs :mod:`tether.sensing.robots_kernels` for ``n`` robots."""
+    if n < 2 or not jit.enabled():
+        return False
+    return n >= KERNEL_MIN_ROBOTS or jit.warm() or jit.mode() == "on"
 
 
 @dataclass(frozen=True)
@@ -143,7 +157,7 @@ def sensed_pairs(
     positions: np.ndarray, sensor: SensorModel, world: World | None = None
 ) -> np.ndarray:
     """Undirected pairs ``(i, k)`` that sense each other (the true interaction graph)."""
-    positions = np.asarray(positions, dtype=float)
+    positions = np.ascontiguousarray(positions, dtype=float)
     pairs = pairs_within(positions, sensor.range_m)
     if len(pairs) == 0:
         return pairs
@@ -151,7 +165,12 @@ def sensed_pairs(
     if world is not None and world.has_obstacles:
         keep &= world.segments_clear(positions[pairs[:, 0]], positions[pairs[:, 1]])
     if sensor.occlusion and sensor.body_radius_m > 0:
-        keep &= ~_occluded(positions, pairs, sensor.body_radius_m)
+        if _use_kernel(len(positions)):
+            from tether.sensing.robots_kernels import occluded_kernel
+
+            keep &= ~occluded_kernel(positions, pairs.astype(np.int64), float(sensor.body_radius_m))
+        else:
+            keep &= ~_occluded(positions, pairs, sensor.body_radius_m)
     return pairs[keep]
 
 
@@ -170,6 +189,36 @@ def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np
     perp = random_perpendicular(rel, rng)
     rotated = np.cos(e_a)[:, None] * direction + np.sin(e_a)[:, None] * perp
     return rotated * np.maximum(dist + e_r, 0.0)[:, None]
+
+
+#: ``rng.choice([-1.0, 1.0], size=k)`` is ``_SIGNS[rng.integers(0, 2, size=k)]``: the
+#: same draws (numpy's ``Generator.choice`` with replacement and no ``p`` draws
+#: ``integers(0, len(a), size)``; tests compare both paths bit for bit) without
+#: ``choice``'s argument checks
+_SIGNS = np.array([-1.0, 1.0])
+
+
+def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
+    """:func:`_noisy` with the arithmetic compiled: the same draws, in the same order.
+
+    ``cos``/``sin`` of the angular errors stay numpy's (so the values are the same).
+    """
+    if sensor.noise == "none" or len(rel) == 0:
+        return rel.copy()
+    k, dim = rel.shape
+    if sensor.noise == "uniform":
+        e_r = rng.uniform(-sensor.radial_error_m, sensor.radial_error_m, size=k)
+        e_a = rng.uniform(-sensor.angular_error_rad, sensor.angular_error_rad, size=k)
+    else:
+        e_r = sensor.radial_error_m * _SIGNS[rng.integers(0, 2, size=k)]
+        e_a = sensor.angular_error_rad * _SIGNS[rng.integers(0, 2, size=k)]
+    if dim == 2:  # random_perpendicular's draws
+        sign, normal = _SIGNS[rng.integers(0, 2, size=k)], np.empty((0, dim))
+    else:
+        sign, normal = np.empty(0), rng.normal(size=(k, dim))
+    from tether.sensing.robots_kernels import noise_kernel
+
+    return noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), sign, normal)
 
 
 def _directed(pairs: np.ndarray, positions: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
@@ -201,14 +250,29 @@ def sense(
     world: World | None = None,
 ) -> Observation:
     """Sense the team: the interaction graph and every robot's noisy measurements."""
-    positions = np.asarray(positions, dtype=float)
+    positions = np.ascontiguousarray(positions, dtype=float)
     n = len(positions)
-    pairs = sensed_pairs(positions, sensor, world)
-    directed, indptr, rel = _directed(pairs, positions, n)
+    if _use_kernel(n) and positions.ndim == 2 and positions.shape[1] in (2, 3):
+        from tether.sensing import robots_kernels as kernels
+
+        if n <= KERNEL_PAIRS_MAX_N and (world is None or not world.has_obstacles):
+            radius = float(sensor.body_radius_m) if sensor.occlusion else 0.0
+            pairs, directed, indptr, rel = kernels.sense_pairs_kernel(
+                positions, float(sensor.range_m), radius
+            )
+        else:
+            pairs = sensed_pairs(positions, sensor, world)
+            directed, indptr, rel = kernels.directed_kernel(pairs.astype(np.int64), positions, n)
+        indptr = indptr.astype(np.intp)
+        measured = _noisy_compiled(rel, sensor, rng)
+    else:
+        pairs = sensed_pairs(positions, sensor, world)
+        directed, indptr, rel = _directed(pairs, positions, n)
+        measured = _noisy(rel, sensor, rng)
     return Observation(
         pairs=pairs,
         indptr=indptr,
         target=directed[:, 1].astype(np.intp),
-        measured=_noisy(rel, sensor, rng),
+        measured=measured,
         true_relative=rel,
     )

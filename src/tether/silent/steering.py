@@ -70,8 +70,17 @@ def desired_steps(
     ``desired_distance`` (13): ``x = 2 gamma sum_k (||x_k|| - d0) x_k / ||x_k||`` (15).
     ``farthest`` (12): ``J = max_k ||x - x_k||``, whose gradient at ``x = 0`` gives
     ``x = gamma x_f / ||x_f||`` towards the farthest sensed robot ``f``.
-    Robots that sense nobody get a zero step.
+    Robots that sense nobody get a zero step. For cost (13), with the compiled kernels
+    (:func:`_use_kernel`), :func:`tether.silent.steering_kernels.desired_distance_kernel`
+    adds the same terms in the same order (bit-identical).
     """
+    if cost == "desired_distance" and _use_kernel(n) and measured.ndim == 2:
+        from tether.silent.steering_kernels import desired_distance_kernel
+
+        return desired_distance_kernel(
+            np.ascontiguousarray(measured, dtype=float),
+            np.asarray(observer, dtype=np.int64), int(n), float(gamma), float(d0_m),
+        )  # fmt: skip
     dist = np.linalg.norm(measured, axis=1)
     direction = unit(measured)
     if cost == "desired_distance":
@@ -173,6 +182,7 @@ def constrained_steps(
     min_separation_m: float = 0.0,
     max_step_m: float = np.inf,
     search_directions: bool = False,
+    indptr: np.ndarray | None = None,
 ) -> np.ndarray:
     """Steps that satisfy (1), (2) and the speed limit, as close to ``desired`` as allowed.
 
@@ -189,10 +199,14 @@ def constrained_steps(
     With :func:`tether.jit.enabled` (and measurements grouped by observer, as an
     :class:`~tether.sensing.Observation` holds them), the compiled
     :mod:`tether.silent.steering_kernels` computes the same steps robot by robot.
+    ``indptr``: the observation's CSR row pointers (``observer`` grouped by robot) if the
+    caller has them, so they are not rebuilt.
     """
     n = len(desired)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
-    if _use_kernel(n) and (len(observer) < 2 or (np.diff(observer) >= 0).all()):
+    grouped = indptr is not None  # an Observation's CSR: measurements grouped by observer
+    if indptr is None:
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
+    if _use_kernel(n) and (grouped or len(observer) < 2 or (np.diff(observer) >= 0).all()):
         from tether.silent.steering_kernels import constrained_steps_kernel
 
         return constrained_steps_kernel(

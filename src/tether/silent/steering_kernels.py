@@ -5,9 +5,15 @@ Non-Communicating Mobile Agents" (Sec. IV), evaluated robustly for the sensor's 
 bounds exactly as :func:`tether.silent.steering._pair_bounds` does, and the candidate
 search of :func:`~tether.silent.steering.constrained_steps`; one pass per robot over its
 own measurements instead of numpy arrays of ``sum_i (1 + deg_i) deg_i`` pairs. The
-arithmetic is the reference's, term for term (norms and dot products summed in the same
-order); ``arccos`` and ``cos`` come from the C library instead of numpy's, so results
-agree to rounding (tests: 1e-12). Imported only when :func:`tether.jit.enabled`.
+arithmetic is the reference's, term for term (norms summed in the same order, dot
+products in ``np.einsum``'s order); ``arccos`` and ``cos`` come from the C library
+instead of numpy's, so results agree to rounding (tests: 1e-12). Imported only when
+:func:`tether.jit.enabled`.
+
+Two exact short cuts (the steps are bit-identical with and without them): the
+direction search skips candidates whose progress cannot beat the best one's, and a
+pair whose bound is surely no smaller than the robot's current bound skips ``acos``
+and ``cos`` (:func:`_bound`).
 """
 
 from __future__ import annotations
@@ -17,15 +23,19 @@ import math
 import numpy as np
 from numba import njit
 
+from tether.sensing.robots_kernels import _einsum_dot
+
 EPS = 1e-12  # tether.geometry.unit's default
 
 
+#: margin on ``cos(phi)`` beyond which a branch of :func:`_bound` is taken without
+#: ``acos`` (an angle error of at least 1e-9 rad, far above ``acos``'s rounding)
+MARGIN = 1e-9
+
+
 @njit(cache=True)
-def _bound(u, mu, dist, d_m, r_err, ang, min_sep):  # noqa: ANN001, ANN202, PLR0913
+def _bound_exact(cos_phi, dist, d_m, r_err, ang, min_sep):  # noqa: ANN001, ANN202, PLR0913
     """:func:`~tether.silent.steering._pair_bounds` for one direction and one measurement."""
-    cos_phi = 0.0
-    for c in range(len(u)):
-        cos_phi += u[c] * mu[c]
     phi = math.acos(min(max(cos_phi, -1.0), 1.0))
     worst = phi + ang
     half_pi = math.pi / 2
@@ -36,6 +46,38 @@ def _bound(u, mu, dist, d_m, r_err, ang, min_sep):  # noqa: ANN001, ANN202, PLR0
     if min_sep > 0 and phi - ang < half_pi:
         bound = min(bound, 0.5 * (dist - r_err - min_sep))
     return max(bound, 0.0)
+
+
+@njit(cache=True)
+def _bound(u, mu, dist, d_m, r_err, ang, min_sep, sin_ang, cos_ang, b):  # noqa: ANN001, ANN202, PLR0913
+    """:func:`_bound_exact`, or ``inf`` when the pair's bound is surely ``>= b``.
+
+    ``min(b, _bound(...))`` is exactly ``min(b, _bound_exact(...))``: where ``cos(phi)``
+    is more than :data:`MARGIN` from a branch's threshold (``worst < pi/2`` is
+    ``cos(phi) > sin(ang)``, ``phi - ang < pi/2`` is ``cos(phi) > -sin(ang)``), the
+    branch is known without ``acos``; constraint (1) is then computed as before, and
+    constraint (2) is skipped when a lower bound of ``cos(phi + ang)`` (by the angle-sum
+    formula, less :data:`MARGIN`) already puts it at or above ``b``.
+    """
+    cos_phi = _einsum_dot(u, mu)
+    c = min(max(cos_phi, -1.0), 1.0)
+    if min_sep > 0:
+        if c > -sin_ang + MARGIN:
+            sep = 0.5 * (dist - r_err - min_sep)
+        elif c < -sin_ang - MARGIN:
+            sep = np.inf
+        else:
+            return _bound_exact(cos_phi, dist, d_m, r_err, ang, min_sep)
+    else:
+        sep = np.inf
+    if c < sin_ang - MARGIN:  # constraint (1), surely
+        return max(min(0.5 * (d_m - dist), sep), 0.0)
+    if c > sin_ang + MARGIN and dist - r_err > 0:  # constraint (2), surely
+        sin_phi = math.sqrt((1.0 - c) * (1.0 + c))
+        low = (dist - r_err) * (c * cos_ang - sin_phi * sin_ang - MARGIN)
+        if max(min(low, sep), 0.0) >= b:
+            return np.inf
+    return _bound_exact(cos_phi, dist, d_m, r_err, ang, min_sep)
 
 
 @njit(cache=True)
@@ -60,6 +102,7 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
     """
     n, dim = desired.shape
     d_m = d_max - r_err
+    sin_ang, cos_ang = math.sin(ang), math.cos(ang)
     m = len(measured)
     dist = np.empty(m)
     mu = np.empty((m, dim))
@@ -74,17 +117,31 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
         last = hi if search else lo
         for cand in range(lo - 1, last):  # lo - 1: the desired direction, then each robot
             u = ud if cand < lo else mu[cand]
+            dot = _einsum_dot(u, ud)
+            # pruning (search only): progress = allowed * dot with allowed >= 0 only
+            # shrinking over k, so a candidate that cannot beat the best is skipped
+            # exactly (ties keep the earlier one anyway); best_progress >= 0 after the
+            # desired direction, so dot <= 0 can never win
+            if (
+                search
+                and best_progress >= 0.0
+                and (dot <= 0.0 or min(length, max_step) * dot <= best_progress)
+            ):
+                continue
             b = np.inf
             for k in range(lo, hi):
-                b = min(b, _bound(u, mu[k], dist[k], d_m, r_err, ang, min_sep))
+                b = min(b, _bound(u, mu[k], dist[k], d_m, r_err, ang, min_sep, sin_ang, cos_ang, b))
+                if (
+                    search
+                    and best_progress >= 0.0
+                    and min(min(length, b), max_step) * dot <= best_progress
+                ):
+                    break
             allowed = min(min(length, b), max_step)
             if not search:
                 for c in range(dim):
                     steps[i, c] = u[c] * allowed
                 break
-            dot = 0.0
-            for c in range(dim):
-                dot += u[c] * ud[c]
             progress = allowed * dot
             if progress > best_progress:  # ties keep the earlier candidate
                 best_k, best_allowed, best_progress = cand, allowed, progress
@@ -95,6 +152,26 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
     return steps
 
 
+@njit(cache=True)
+def desired_distance_kernel(measured, observer, n, gamma, d0_m):  # noqa: ANN001, ANN201
+    """:func:`~tether.silent.steering.desired_steps` for cost (13): eq. (15) summed per robot.
+
+    The same terms ``2 gamma (||x_k|| - d0) x_k / ||x_k||`` added in measurement order
+    as ``np.add.at`` adds them, so the sums are bit-identical.
+    """
+    m, dim = measured.shape
+    out = np.zeros((n, dim))
+    u = np.empty(dim)
+    scale = 2.0 * gamma
+    for q in range(m):
+        dist = _norm_unit(measured[q], u)
+        f = scale * (dist - d0_m)
+        o = observer[q]
+        for c in range(dim):
+            out[o, c] += f * u[c]
+    return out
+
+
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernel for 2-D and 3-D teams."""
     for dim in (2, 3):
@@ -103,3 +180,4 @@ def warm_up() -> None:
         indptr = np.array([0, 1, 2], np.int64)
         for search in (False, True):
             constrained_steps_kernel(desired, measured, indptr, 15.0, 0.4, 0.2, 0.5, np.inf, search)
+        desired_distance_kernel(measured, indptr[:-1].copy(), 2, 0.2, 8.0)

@@ -1,0 +1,243 @@
+"""Compiled sensing of :mod:`tether.sensing.robots` (numba): occlusion, CSR, noise.
+
+Three kernels, each the arithmetic of its reference, term for term:
+
+* :func:`occluded_kernel` -- :func:`~tether.sensing.robots._occluded`: robot ``j`` hides
+  ``k`` from ``i`` when it is closer to both than they are to each other and its body
+  meets the segment (Kerestecioglu and Cezayirli, "Connected Navigation of
+  Non-Communicating Mobile Agents", Fig. 3); the same squared distances, summed in
+  coordinate order, over ``i``'s range-neighbours, robot by robot instead of numpy
+  arrays of ``sum_i deg_i^2`` candidates;
+* :func:`directed_kernel` -- :func:`~tether.sensing.robots._directed`: both directions
+  of every pair sorted by (observer, target) with a counting sort and relatives;
+* :func:`sense_pairs_kernel` -- for small teams in free space, the three steps before
+  the noise in one call (range by :func:`~tether.graph.kernels.pairs_within_kernel`,
+  occlusion, CSR): numba's dispatch costs microseconds per call and argument;
+* :func:`noise_kernel` -- the arithmetic of :func:`~tether.sensing.robots._noisy`
+  (bounded radial and angular errors, the paper's Fig. 1) once its random numbers are
+  drawn: the caller draws them with numpy's ``Generator`` in the reference's order and
+  passes them in (with ``cos``/``sin`` of the angular errors, numpy's), so the
+  measurements are bit-identical.
+
+Imported only when :func:`tether.sensing.robots._use_kernel` says so (tests compare
+each kernel with its reference bit for bit).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from tether.graph.kernels import pairs_within_kernel
+
+EPS = 1e-12  # tether.geometry.unit's default
+
+
+@njit(cache=True)
+def _einsum_dot(a, b):  # noqa: ANN001, ANN202
+    """``np.einsum("kd,kd->k")`` for one row, in its summation order.
+
+    numpy's inner loop adds two lanes: ``a_0 b_0 + a_1 b_1`` in 2-D,
+    ``(a_0 b_0 + a_2 b_2) + a_1 b_1`` in 3-D (tests compare bit for bit).
+    """
+    if len(a) == 3:
+        return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
+    s = 0.0
+    for c in range(len(a)):
+        s += a[c] * b[c]
+    return s
+
+
+@njit(cache=True)
+def _neighbours(n, pairs):  # noqa: ANN001, ANN202
+    """CSR neighbour lists (both directions) of the undirected ``pairs``."""
+    indptr = np.zeros(n + 1, np.int64)
+    for p in range(len(pairs)):
+        indptr[pairs[p, 0] + 1] += 1
+        indptr[pairs[p, 1] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:-1].copy()
+    nbr = np.empty(indptr[n], np.int64)
+    for p in range(len(pairs)):
+        a, b = pairs[p, 0], pairs[p, 1]
+        nbr[fill[a]] = b
+        fill[a] += 1
+        nbr[fill[b]] = a
+        fill[b] += 1
+    return indptr, nbr
+
+
+@njit(cache=True)
+def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
+    """Per pair: a third robot's body hides the pair (``_occluded``'s test exactly).
+
+    Each robot's neighbours are sorted by their squared distance (the value the test
+    computes), so the scan of pair ``(i, k)`` stops at the first neighbour no closer
+    to ``i`` than ``k``: the test ``|ij|^2 < |ik|^2`` fails for every later one.
+    """
+    n, dim = positions.shape
+    m = len(pairs)
+    out = np.zeros(m, np.bool_)
+    if m == 0 or body_radius_m <= 0:
+        return out
+    indptr, nbr = _neighbours(n, pairs)
+    d2 = np.empty(len(nbr))
+    ik = np.empty(dim)
+    ij = np.empty(dim)
+    for i in range(n):
+        lo, hi = indptr[i], indptr[i + 1]
+        for e in range(lo, hi):
+            for c in range(dim):
+                ij[c] = positions[nbr[e], c] - positions[i, c]
+            d2[e] = _einsum_dot(ij, ij)
+        for e in range(lo + 1, hi):  # insertion sort by squared distance
+            j, dj = nbr[e], d2[e]
+            f = e
+            while f > lo and d2[f - 1] > dj:
+                nbr[f], d2[f] = nbr[f - 1], d2[f - 1]
+                f -= 1
+            nbr[f], d2[f] = j, dj
+    r2 = body_radius_m**2
+    for p in range(m):
+        i, k = pairs[p, 0], pairs[p, 1]
+        for c in range(dim):
+            ik[c] = positions[k, c] - positions[i, c]
+        d2_ik = _einsum_dot(ik, ik)
+        for e in range(indptr[i], indptr[i + 1]):
+            d2_ij = d2[e]
+            if not d2_ij < d2_ik:
+                break
+            j = nbr[e]
+            if j == k:
+                continue
+            for c in range(dim):
+                ij[c] = positions[j, c] - positions[i, c]
+            proj = _einsum_dot(ij, ik)
+            d2_kj = d2_ik - 2.0 * proj + d2_ij
+            perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
+            if d2_kj < d2_ik and perp2 < r2:
+                out[p] = True
+                break
+    return out
+
+
+@njit(cache=True)
+def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
+    """``_directed``: directed pairs sorted by (observer, target), CSR indptr, relatives."""
+    m = len(pairs)
+    dim = positions.shape[1]
+    indptr = np.zeros(n + 1, np.int64)
+    for p in range(m):
+        indptr[pairs[p, 0] + 1] += 1
+        indptr[pairs[p, 1] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:-1].copy()
+    target = np.empty(2 * m, np.int64)
+    for p in range(m):
+        a, b = pairs[p, 0], pairs[p, 1]
+        target[fill[a]] = b
+        fill[a] += 1
+        target[fill[b]] = a
+        fill[b] += 1
+    directed = np.empty((2 * m, 2), np.int64)
+    rel = np.empty((2 * m, dim))
+    for v in range(n):
+        lo, hi = indptr[v], indptr[v + 1]
+        for e in range(lo + 1, hi):  # insertion sort: lists are short and mostly sorted
+            t = target[e]
+            f = e
+            while f > lo and target[f - 1] > t:
+                target[f] = target[f - 1]
+                f -= 1
+            target[f] = t
+        for e in range(lo, hi):
+            directed[e, 0] = v
+            directed[e, 1] = target[e]
+            for c in range(dim):
+                rel[e, c] = positions[target[e], c] - positions[v, c]
+    return directed, indptr, rel
+
+
+@njit(cache=True)
+def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN201
+    """Sensed pairs (no obstacles; occlusion if ``body_radius_m > 0``), then ``_directed``.
+
+    Returns ``(pairs, directed, indptr, rel)`` as :func:`~tether.sensing.robots.sense`
+    builds them; all pairs are tested (teams of up to a few hundred robots).
+    """
+    n = positions.shape[0]
+    pairs = pairs_within_kernel(positions, range_m)
+    if body_radius_m > 0 and len(pairs):
+        hidden = occluded_kernel(positions, pairs, body_radius_m)
+        keep = 0
+        for p in range(len(pairs)):
+            if not hidden[p]:
+                pairs[keep, 0], pairs[keep, 1] = pairs[p, 0], pairs[p, 1]
+                keep += 1
+        pairs = pairs[:keep].copy()
+    directed, indptr, rel = directed_kernel(pairs, positions, n)
+    return pairs, directed, indptr, rel
+
+
+@njit(cache=True)
+def _unit_row(v, out):  # noqa: ANN001, ANN202
+    """``out = unit(v)`` as :func:`tether.geometry.unit`; returns ``||v||``."""
+    s = 0.0
+    for c in range(len(v)):
+        s += v[c] * v[c]
+    norm = math.sqrt(s)
+    for c in range(len(v)):
+        out[c] = v[c] / max(norm, EPS) if norm > EPS else 0.0
+    return norm
+
+
+@njit(cache=True)
+def noise_kernel(rel, e_r, cos_a, sin_a, sign, normal):  # noqa: ANN001, ANN201, PLR0913
+    """``_noisy``'s measurements from its draws: ``sign`` (2-D) or ``normal`` (3-D).
+
+    2-D: the perpendicular is ``(-u_1, u_0) * sign``; 3-D: ``normal`` minus its
+    component along ``u``, normalised (``u x e_x`` when that is below 1e-9), as
+    :func:`tether.geometry.random_perpendicular`.
+    """
+    k, dim = rel.shape
+    out = np.empty((k, dim))
+    u = np.empty(dim)
+    perp = np.empty(dim)
+    r = np.empty(dim)
+    for q in range(k):
+        dist = _unit_row(rel[q], u)
+        if dim == 2:
+            perp[0] = -u[1] * sign[q]
+            perp[1] = u[0] * sign[q]
+        else:
+            dot = _einsum_dot(normal[q], u)
+            for c in range(dim):
+                r[c] = normal[q, c] - dot * u[c]
+            s = 0.0
+            for c in range(dim):
+                s += r[c] * r[c]
+            if math.sqrt(s) < 1e-9:  # np.cross(u, (1, 0, 0))
+                r[0] = u[1] * 0.0 - u[2] * 0.0
+                r[1] = u[2] * 1.0 - u[0] * 0.0
+                r[2] = u[0] * 0.0 - u[1] * 1.0
+            _unit_row(r, perp)
+        scale = max(dist + e_r[q], 0.0)
+        for c in range(dim):
+            out[q, c] = (cos_a[q] * u[c] + sin_a[q] * perp[c]) * scale
+    return out
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the kernels for 2-D and 3-D teams."""
+    for dim in (2, 3):
+        pos = np.eye(3, dim) * 2.0
+        pairs = np.array([[0, 1], [0, 2], [1, 2]], np.int64)
+        occluded_kernel(pos, pairs, 0.5)
+        sense_pairs_kernel(pos, 3.0, 0.5)
+        _, _, rel = directed_kernel(pairs, pos, 3)
+        k = len(rel)
+        noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), np.ones(k), np.ones((k, dim)))
