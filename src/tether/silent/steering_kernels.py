@@ -23,10 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-from tether.sensing.robots_kernels import _einsum_dot
-
-EPS = 1e-12  # tether.geometry.unit's default
-
+from tether.sensing.robots_kernels import _einsum_dot, _unit_row
 
 #: margin on ``cos(phi)`` beyond which a branch of :func:`_bound` is taken without
 #: ``acos`` (an angle error of at least 1e-9 rad, far above ``acos``'s rounding)
@@ -81,18 +78,6 @@ def _bound(u, mu, dist, d_m, r_err, ang, min_sep, sin_ang, cos_ang, b):  # noqa:
 
 
 @njit(cache=True)
-def _norm_unit(v, out):  # noqa: ANN001, ANN202
-    """``||v||`` and ``out = unit(v)`` as :func:`tether.geometry.unit` (zero stays zero)."""
-    s = 0.0
-    for c in range(len(v)):
-        s += v[c] * v[c]
-    norm = math.sqrt(s)
-    for c in range(len(v)):
-        out[c] = v[c] / max(norm, EPS) if norm > EPS else 0.0
-    return norm
-
-
-@njit(cache=True)
 def constrained_steps_kernel(  # noqa: ANN201, PLR0913
     desired, measured, indptr, d_max, r_err, ang, min_sep, max_step, search
 ):  # noqa: ANN001
@@ -107,11 +92,11 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
     dist = np.empty(m)
     mu = np.empty((m, dim))
     for k in range(m):
-        dist[k] = _norm_unit(measured[k], mu[k])
+        dist[k] = _unit_row(measured[k], mu[k])
     steps = np.zeros((n, dim))
     ud = np.empty(dim)
     for i in range(n):
-        length = _norm_unit(desired[i], ud)
+        length = _unit_row(desired[i], ud)
         lo, hi = indptr[i], indptr[i + 1]
         best_k, best_allowed, best_progress = -1, 0.0, -np.inf
         last = hi if search else lo
@@ -164,7 +149,7 @@ def desired_distance_kernel(measured, observer, n, gamma, d0_m):  # noqa: ANN001
     u = np.empty(dim)
     scale = 2.0 * gamma
     for q in range(m):
-        dist = _norm_unit(measured[q], u)
+        dist = _unit_row(measured[q], u)
         f = scale * (dist - d0_m)
         o = observer[q]
         for c in range(dim):
