@@ -19,6 +19,7 @@ A link model is created from the registry by name with its parameters, e.g.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -36,6 +37,22 @@ class LinkModel(Protocol):
     def linked(self, free: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray: ...
 
 
+def _within_range_and(
+    range_cells: float,
+    a: np.ndarray,
+    b: np.ndarray,
+    test: Callable[[np.ndarray, np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """Pairs ``a[k]``-``b[k]`` within ``range_cells`` passing ``test`` (run on those only)."""
+    a = np.atleast_2d(np.asarray(a, dtype=float))
+    b = np.atleast_2d(np.asarray(b, dtype=float))
+    close = np.linalg.norm(b - a, axis=1) <= range_cells
+    out = np.zeros(len(a), dtype=bool)
+    if close.any():
+        out[close] = test(a[close], b[close])
+    return out
+
+
 @LINK_MODELS.register("los")
 @dataclass
 class LineOfSightLinks:
@@ -44,13 +61,7 @@ class LineOfSightLinks:
     range_cells: float = 150.0
 
     def linked(self, free: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        a = np.atleast_2d(np.asarray(a, dtype=float))
-        b = np.atleast_2d(np.asarray(b, dtype=float))
-        close = np.linalg.norm(b - a, axis=1) <= self.range_cells
-        out = np.zeros(len(a), dtype=bool)
-        if close.any():
-            out[close] = segment_free(free, a[close], b[close])
-        return out
+        return _within_range_and(self.range_cells, a, b, lambda p, q: segment_free(free, p, q))
 
     def blocked_forever(
         self, known_occupied: np.ndarray, a: np.ndarray, b: np.ndarray
@@ -131,13 +142,9 @@ class SignalLinks:
         return self.ref_power_dbm - loss - self.wall_loss_db * walls
 
     def linked(self, free: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        a = np.atleast_2d(np.asarray(a, dtype=float))
-        b = np.atleast_2d(np.asarray(b, dtype=float))
-        close = np.linalg.norm(b - a, axis=1) <= self.range_cells
-        out = np.zeros(len(a), dtype=bool)
-        if close.any():
-            out[close] = self.power_dbm(free, a[close], b[close]) >= self.cutoff_dbm
-        return out
+        return _within_range_and(
+            self.range_cells, a, b, lambda p, q: self.power_dbm(free, p, q) >= self.cutoff_dbm
+        )
 
     def blocked_forever(
         self, known_occupied: np.ndarray, a: np.ndarray, b: np.ndarray
