@@ -26,22 +26,11 @@ import pytest
 import yaml
 from PIL import Image
 
+from _cli import tether
 from tether import cli
 from tether.config import load_scenario
 
 # --------------------------------------------------------------------------- harness
-
-
-def tether(capsys, *args: str) -> tuple[int, str, str]:
-    """Run ``tether ARGS`` in this process; (exit code, stdout, stderr)."""
-    capsys.readouterr()
-    try:
-        cli.main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def assert_one_line(code: int, err: str, *needles: str) -> str:
