@@ -12,21 +12,27 @@ import numpy as np
 import pytest
 
 from tether import jit
-from tether.sensing import SensorModel, sense
+from tether.sensing import Observation, SensorModel, sense
 from tether.silent.steering import constrained_steps, desired_steps
 
 pytest.importorskip("numba")
 
 
-@pytest.mark.parametrize("seed", range(8))
-@pytest.mark.parametrize("dim", [2, 3])
-def test_kernel_matches_reference(seed: int, dim: int) -> None:
+def _random_observation(seed: int, dim: int) -> tuple[np.random.Generator, int, Observation]:
+    """A random team of 1-59 robots sensed with the silent paper's error bounds."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 60))
     pos = rng.uniform(0.0, 30.0, (n, dim))
     sensor = SensorModel(15.0, body_radius_m=0.5, radial_error_m=0.45,
                          angular_error_rad=np.radians(12))  # fmt: skip
     obs = sense(pos, sensor, rng)
+    return rng, n, obs
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("dim", [2, 3])
+def test_kernel_matches_reference(seed: int, dim: int) -> None:
+    rng, n, obs = _random_observation(seed, dim)
     desired = rng.normal(size=(n, dim)) * rng.uniform(0.0, 3.0, (n, 1))
     desired[rng.random(n) < 0.1] = 0.0  # robots that do not want to move
     observer = obs.observer()
@@ -45,12 +51,7 @@ def test_kernel_matches_reference(seed: int, dim: int) -> None:
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("dim", [2, 3])
 def test_desired_distance_kernel_is_bit_identical(seed: int, dim: int) -> None:
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(1, 60))
-    pos = rng.uniform(0.0, 30.0, (n, dim))
-    sensor = SensorModel(15.0, body_radius_m=0.5, radial_error_m=0.45,
-                         angular_error_rad=np.radians(12))  # fmt: skip
-    obs = sense(pos, sensor, rng)
+    rng, n, obs = _random_observation(seed, dim)
     with jit.using(False):
         ref = desired_steps(obs.measured, obs.observer(), n, gamma=0.3, d0_m=7.0)
     with jit.using(True):
