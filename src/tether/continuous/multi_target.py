@@ -30,8 +30,9 @@ from tether.continuous.dynamics import integrate
 from tether.continuous.election import Election
 from tether.continuous.params import TRAVEL_TABLE2
 from tether.continuous.placement import safe_team
+from tether.continuous.recruit import HelpFlood, help_depth, help_force
 from tether.continuous.reference_filter import ReferenceFilter
-from tether.continuous.roles import ANCHOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
+from tether.continuous.roles import ANCHOR, CONNECTOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
 from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
 from tether.continuous.targets import TargetBook
 from tether.continuous.travel import (
@@ -94,6 +95,10 @@ class MultiTargetParams(ConnectivityStrategyParams):
         default=None, gt=0, description="planning inflation; default (Ro + R'o) / 2"
     )
     stall_timeout_s: float | None = Field(default=60.0, gt=0)
+    help_after_s: float | None = Field(
+        default=10.0, gt=0, description="a stalled prime asks for help (None: never)"
+    )
+    help_max_hops: int = Field(default=4, ge=1)
     max_travel_force_n: float = Field(default=10.0, gt=0)
     election_criterion: Literal["path_length", "distance"] = "path_length"
     messages: MessagesConfig = Field(default_factory=MessagesConfig)
@@ -262,6 +267,11 @@ class MultiTargetStrategy(ConnectivityStrategy):
         comm = CommParams(p.messages.loss_probability, p.messages.delay_rounds)
         self.election = Election(n, MessageLayer(n, comm, rng))
         self.consensus = EfficiencyConsensus(n, MessageLayer(n, comm, rng), p.k_lambda_per_s)
+        self.help = HelpFlood(n, state.dim, MessageLayer(n, comm, rng))
+        self._helpers = np.zeros(0, dtype=int)
+        self._help_depth = 0
+        self._help_requests = 0
+        self._helper_s = 0.0
         self.planner = RolePlanner(
             world, self.targets, r_grid_m=p.r_grid_m, rz_m=p.rz_m,
             inflate_m=p.inflate_m or 0.5 * (p.ro_m + p.ro_outer_m),
@@ -338,6 +348,27 @@ class MultiTargetStrategy(ConnectivityStrategy):
             self._prime_eff = float(efficiency(np.array([err]), *band)[0])
         for _ in range(rounds):
             self.consensus.round(links, dt_s / rounds, prime, self._prime_eff)
+        self._recruit(q, links, prime, t_s, dt_s)
+
+    def _recruit(
+        self, q: np.ndarray, links: np.ndarray, prime: int, t_s: float, dt_s: float
+    ) -> None:
+        """A stalled prime's help request, flooded; who follows whom (:mod:`.recruit`)."""
+        p, pl = self.params, self.planner
+        depth = 0
+        if prime >= 0 and p.help_after_s is not None:
+            depth = help_depth(pl.stalled_s(prime, t_s), p.help_after_s, p.help_max_hops)
+        if depth != self._help_depth:
+            if depth > self._help_depth:
+                self._help_requests += self._help_depth == 0
+                self.emit("help_requested", prime, t_s=t_s, hops=depth)
+            elif depth == 0:
+                self.emit("help_ended", max(prime, -1), t_s=t_s)
+            self._help_depth = depth
+        for _ in range(p.messages.rounds_per_step):
+            self.help.round(links, q, prime, depth)
+        self._helpers = self.help.helpers((pl.role == CONNECTOR) | (pl.role == SECONDARY))
+        self._helper_s += len(self._helpers) * dt_s
 
     def step(self, ctx: StepContext) -> TeamState:
         self._step = ctx.step
@@ -345,9 +376,17 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._communicate(q, v, ctx.t_s, ctx.dt_s)
         self._held = self._anchors()  # roles and targets do not change until the next period
 
+        p, helpers = self.params, self._helpers
+        parents_m = self.help.parent_m[helpers]
+
         def external(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray) -> np.ndarray:
-            return traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate,
-                                    self.params, anchors=self._held)  # fmt: skip
+            f = traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate, p,
+                                 anchors=self._held)  # fmt: skip
+            if len(helpers):  # recruited: follow the parent instead (a secondary's f_i too)
+                f[helpers] = help_force(qq[helpers], vv[helpers], parents_m, keep_m=p.rs_inner_m,
+                                        kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
+                                        max_force_n=p.max_travel_force_n)  # fmt: skip
+            return f
 
         try:
             q_new, v_new, ev, stats = integrate(
@@ -425,6 +464,8 @@ class MultiTargetStrategy(ConnectivityStrategy):
             "mean_lambda2_weighted": self._lambda_sum / max(self._lambda_count, 1),
             "elections": self._elections,
             "max_simultaneous_primes": self._max_primes,
+            "help_requests": self._help_requests,
+            "helper_robot_s": self._helper_s,
         }
         if self.filter is not None:
             out["reference_filter_max_deviation_m"] = self._filter_dev

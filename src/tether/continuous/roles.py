@@ -217,6 +217,12 @@ class RolePlanner:
                     t_s - self.progress_at[i] > self.stall_timeout_s:  # fmt: skip
                 self.drop(i, t_s, "stalled")
 
+    def stalled_s(self, robot: int, t_s: float) -> float:
+        """Time the prime ``robot`` has not shrunk its path by ``Rgrid`` (0: not a prime)."""
+        if self.role[robot] != PRIME or np.isnan(self.progress_at[robot]):
+            return 0.0
+        return t_s - float(self.progress_at[robot])
+
     def _secondary(self, i: int, q: np.ndarray, dist: float, off_path: float, t_s: float) -> None:
         if self._paths[i] is not None and off_path > self.r_gamma_m:
             new = self.plan(i, q)  # line 18: dragged too far from the path

@@ -1,0 +1,127 @@
+"""Recruiting helpers for a stalled prime traveler (beyond the paper).
+
+The completeness of Algorithm 1 (Prop. 2) rests on Assumption 1: the prime
+traveler reaches its target in finite time whatever the others do. In a
+cluttered scene that can fail: a prime at the end of a chain, held by one link
+whose weight falls to 0 past a building edge, meets a connectivity force that
+grows without bound while its traveling force is bounded (10 N), and the
+connectors, whose own force is 0, are not pulled along by the team's gradient
+(the town trials of Fig. 9 that stalled; ``docs/multi_target.md``).
+
+The remedy here: a prime whose remaining path has not shrunk by ``Rgrid`` for
+``help_after_s`` asks for help. The request floods through the message layer
+(so loss and delay reach it) to a depth that grows by one hop every further
+``help_after_s`` of stall, up to ``max_hops``. A connector or secondary
+traveler that hears it at hop ``h`` from the prime follows the neighbour it
+heard it from (its parent, one hop closer to the prime): the force
+``f = sat(k_p (d - R's)^+ u - k_v v, F_max)`` pulls it to within ``R's`` of the
+parent's last broadcast position (``u`` the unit vector towards it, ``d`` the
+distance), the distance below which the range factor of the link weight is 1.
+A secondary's own traveling force is suspended while it helps. Anchors relay
+the request but stay at their targets. The request ends as soon as the prime
+makes progress again; if it still has none after ``stall_timeout_s``, the
+target is dropped as before.
+
+Each robot's state uses only what its neighbours sent: its hop count is one
+more than the smallest hop count among the requests it holds whose depth
+allows another hop (ties to the lower sender index).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tether.comm import MessageLayer
+from tether.continuous.travel import saturate
+
+NO_HELP = np.inf
+
+
+class HelpFlood:
+    """The help request of a stalled prime, flooded one hop per message round.
+
+    Each robot broadcasts ``(hop, depth, x, y[, z])``: its hop count from the
+    stalled prime (``inf``: not in the request) and the request's depth.
+
+    Parameters
+    ----------
+    n, dim
+        Team size and space dimension.
+    layer
+        The message layer the request travels through.
+    """
+
+    def __init__(self, n: int, dim: int, layer: MessageLayer) -> None:
+        self.layer = layer
+        self.max_age = layer.params.delay_rounds + 2  # older mail is not a live request
+        self._quiet = True  # the last round sent no request: rounds may be skipped
+        self.hop = np.full(n, NO_HELP)
+        self.depth = np.zeros(n)
+        self.parent = np.full(n, -1)
+        self.parent_m = np.full((n, dim), np.nan)
+
+    def round(self, pairs: np.ndarray, q: np.ndarray, prime: int, depth: int) -> None:
+        """One exchange: the prime (``depth > 0``: asking) sets hop 0, the others relay.
+
+        While nobody asks and the last round carried no request, the round is
+        skipped (every robot would send "no request" and hear nothing else).
+        """
+        if prime >= 0:
+            asking = depth > 0
+            self.hop[prime], self.depth[prime] = (0.0, float(depth)) if asking else (NO_HELP, 0.0)
+        quiet = not np.isfinite(self.hop).any()
+        if quiet and self._quiet:
+            return
+        self._quiet = quiet
+        sent = np.column_stack([self.hop, self.depth, q])
+        inbox = self.layer.exchange(pairs, sent)
+        ok = (inbox.valid & (inbox.age <= self.max_age)
+              & (inbox.values[:, 0] + 1 <= inbox.values[:, 1]))  # fmt: skip
+        recv, send, vals = inbox.receiver[ok], inbox.sender[ok], inbox.values[ok]
+        n = len(self.hop)
+        hop, depth, parent = np.full(n, NO_HELP), np.zeros(n), np.full(n, -1)
+        parent_m = np.full_like(self.parent_m, np.nan)
+        order = np.lexsort((send, vals[:, 0], recv))  # per receiver: smallest hop, lower index
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = recv[order][1:] != recv[order][:-1]
+        best = order[first]
+        r = recv[best]
+        hop[r], depth[r], parent[r] = vals[best, 0] + 1, vals[best, 1], send[best]
+        parent_m[r] = vals[best, 2:]
+        if prime >= 0 and self.hop[prime] == 0:  # the prime keeps asking whatever it hears
+            hop[prime], depth[prime], parent[prime] = 0.0, self.depth[prime], -1
+            parent_m[prime] = np.nan
+        self.hop, self.depth, self.parent, self.parent_m = hop, depth, parent, parent_m
+
+    def helpers(self, may_help: np.ndarray) -> np.ndarray:
+        """Indices of the robots that help now (``may_help``: connectors and secondaries)."""
+        return np.flatnonzero((self.hop >= 1) & np.isfinite(self.hop) & may_help)
+
+
+def help_depth(stalled_s: float, help_after_s: float, max_hops: int) -> int:
+    """Hops the request reaches after ``stalled_s`` without progress (0: no request)."""
+    if not np.isfinite(stalled_s) or stalled_s < help_after_s:
+        return 0
+    return int(min(max_hops, 1 + (stalled_s - help_after_s) // help_after_s))
+
+
+def help_force(
+    q: np.ndarray,
+    v: np.ndarray,
+    parent_m: np.ndarray,
+    *,
+    keep_m: float,
+    kp: float,
+    kv: float,
+    max_force_n: float,
+) -> np.ndarray:
+    """``sat(k_p (d - keep) u - k_v v, F_max)`` towards the parents beyond ``keep_m``, ``(h, dim)``.
+
+    A helper already within ``keep_m`` of its parent gets no force (it moves as a
+    connector, by the connectivity force alone).
+    """
+    gap = parent_m - q
+    d = np.linalg.norm(gap, axis=1, keepdims=True)
+    far = d > keep_m
+    pull = np.where(far, kp * (d - keep_m) * gap / np.maximum(d, 1e-12) - kv * v, 0.0)
+    return saturate(pull, max_force_n)

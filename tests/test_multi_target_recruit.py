@@ -1,0 +1,102 @@
+"""Recruiting helpers for a stalled prime traveler (``tether.continuous.recruit``)."""
+
+from __future__ import annotations
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from tether.comm import CommParams, MessageLayer
+from tether.continuous.recruit import HelpFlood, help_depth, help_force
+
+
+def random_connected_pairs(rng: np.random.Generator, n: int) -> np.ndarray:
+    """A random tree plus a few chords."""
+    pairs = {(int(rng.integers(i)), i) for i in range(1, n)}
+    for _ in range(n // 3):
+        a, b = sorted(rng.choice(n, 2, replace=False).tolist())
+        pairs.add((a, b))
+    return np.array(sorted(pairs))
+
+
+def test_the_request_deepens_with_the_stall_and_is_capped() -> None:
+    depths = [help_depth(s, 10.0, 4) for s in np.arange(0.0, 100.0, 0.5)]
+    assert depths[:20] == [0] * 20  # nothing before help_after_s
+    assert help_depth(10.0, 10.0, 4) == 1 and help_depth(29.9, 10.0, 4) == 2
+    assert np.all(np.diff(depths) >= 0) and max(depths) == 4
+    assert help_depth(float("nan"), 10.0, 4) == 0
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_helpers_are_the_robots_within_depth_hops_following_a_closer_neighbour(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n, depth = int(rng.integers(6, 25)), int(rng.integers(1, 5))
+    pairs = random_connected_pairs(rng, n)
+    q = rng.uniform(0, 50, (n, 3))
+    prime = int(rng.integers(n))
+    flood = HelpFlood(n, 3, MessageLayer(n, CommParams(), rng))
+    for _ in range(depth + 1):  # one hop per round
+        flood.round(pairs, q, prime, depth)
+    hops = nx.single_source_shortest_path_length(nx.Graph(pairs.tolist()), prime)
+    expect = sorted(i for i, h in hops.items() if 1 <= h <= depth)
+    assert flood.helpers(np.ones(n, dtype=bool)).tolist() == expect
+    for i in expect:
+        j = flood.parent[i]
+        assert (min(i, j), max(i, j)) in set(map(tuple, pairs.tolist()))  # a neighbour
+        assert hops[j] == hops[i] - 1  # one hop closer to the prime
+        candidates = [k for k in range(n) if hops.get(k) == hops[i] - 1 and
+                      (min(i, k), max(i, k)) in set(map(tuple, pairs.tolist()))]  # fmt: skip
+        assert j == min(candidates)  # ties to the lower index
+        np.testing.assert_array_equal(flood.parent_m[i], q[j])  # the parent's broadcast
+    # only robots allowed to help (connectors, secondaries) are returned
+    may = rng.random(n) < 0.5
+    assert set(flood.helpers(may).tolist()) == {i for i in expect if may[i]}
+
+
+def test_the_request_ends_when_the_prime_makes_progress() -> None:
+    n = 10
+    pairs = np.array([(i, i + 1) for i in range(n - 1)])
+    q = np.arange(n * 3, dtype=float).reshape(n, 3)
+    flood = HelpFlood(n, 3, MessageLayer(n, CommParams(), np.random.default_rng(0)))
+    for _ in range(5):
+        flood.round(pairs, q, 0, 4)
+    assert flood.helpers(np.ones(n, dtype=bool)).tolist() == [1, 2, 3, 4]
+    for _ in range(6):  # stale hop counts may bounce between helpers, but only up to the depth
+        flood.round(pairs, q, 0, 0)
+    assert len(flood.helpers(np.ones(n, dtype=bool))) == 0
+    layer_round = flood.layer.round
+    flood.round(pairs, q, 0, 0)  # quiet: the round is skipped
+    assert flood.layer.round == layer_round
+
+
+def test_lost_messages_slow_the_request_but_never_reach_beyond_the_depth() -> None:
+    rng = np.random.default_rng(3)
+    n, depth = 12, 3
+    pairs = np.array([(i, i + 1) for i in range(n - 1)])
+    q = rng.uniform(0, 10, (n, 3))
+    flood = HelpFlood(n, 3, MessageLayer(n, CommParams(loss_probability=0.4), rng))
+    seen: set[int] = set()
+    for _ in range(60):
+        flood.round(pairs, q, 0, depth)
+        seen |= set(flood.helpers(np.ones(n, dtype=bool)).tolist())
+    assert seen == {1, 2, 3}
+
+
+def test_help_force_pulls_to_the_keep_distance_bounded_and_damped() -> None:
+    rng = np.random.default_rng(0)
+    q, parent = rng.uniform(-5, 5, (200, 3)), rng.uniform(-5, 5, (200, 3))
+    v = np.zeros_like(q)
+    f = help_force(q, v, parent, keep_m=2.5, kp=4.0, kv=4.0, max_force_n=10.0)
+    d = np.linalg.norm(parent - q, axis=1)
+    assert np.all(np.linalg.norm(f, axis=1) <= 10.0 + 1e-12)
+    assert np.all(f[d <= 2.5] == 0.0)  # close enough: a plain connector
+    far = d > 2.5
+    cos = np.einsum("ij,ij->i", f[far], parent[far] - q[far])
+    assert np.all(cos > 0)  # towards the parent
+    expect = np.minimum(4.0 * (d[far] - 2.5), 10.0)
+    np.testing.assert_allclose(np.linalg.norm(f[far], axis=1), expect, rtol=1e-12)
+    # moving away from the parent is damped: the force grows
+    away = -(parent - q) / np.maximum(d, 1e-12)[:, None]
+    g = help_force(q, 0.1 * away, parent, keep_m=2.5, kp=4.0, kv=4.0, max_force_n=np.inf)
+    ff = help_force(q, v, parent, keep_m=2.5, kp=4.0, kv=4.0, max_force_n=np.inf)
+    assert np.all(np.linalg.norm(g[far], axis=1) > np.linalg.norm(ff[far], axis=1))
