@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Any
+
 import networkx as nx
 import numpy as np
 import pytest
 
 from tether.comm import CommParams, MessageLayer
+from tether.config import load_scenario
 from tether.continuous.recruit import HelpFlood, help_depth, help_force
+from tether.record import TrajectoryRecorder
+from tether.runner import build
+from tether.sim import simulate
 
 
 def random_connected_pairs(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -100,3 +107,38 @@ def test_help_force_pulls_to_the_keep_distance_bounded_and_damped() -> None:
     g = help_force(q, 0.1 * away, parent, keep_m=2.5, kp=4.0, kv=4.0, max_force_n=np.inf)
     ff = help_force(q, v, parent, keep_m=2.5, kp=4.0, kv=4.0, max_force_n=np.inf)
     assert np.all(np.linalg.norm(g[far], axis=1) > np.linalg.norm(ff[far], axis=1))
+
+
+DEADLOCK = Path(__file__).parent / "data" / "deadlock_town.yaml"
+
+
+def run_deadlock(max_steps: int, **params: Any) -> tuple[dict, TrajectoryRecorder, np.ndarray]:
+    sc = load_scenario(DEADLOCK)
+    for key, value in params.items():
+        sc.strategy.params[key] = value
+    built = build(sc)
+    recorder = TrajectoryRecorder()
+    result = simulate(built.world, built.sensor, built.strategy, built.initial, dt_s=0.1,
+                      max_steps=max_steps, rng=built.rng,
+                      collision_distance_m=1.0, recorder=recorder)  # fmt: skip
+    target = np.array([48.258, 16.711, 2.886])
+    dist = np.array([np.linalg.norm(q[7] - target) for q in recorder.positions])
+    out = {**result.strategy_metrics, "connected_all_steps": result.connected_all_steps,
+           "collisions": sum(r.collisions for r in result.records)}  # fmt: skip
+    return out, recorder, dist
+
+
+def test_helpers_break_a_town_deadlock_that_holds_without_them() -> None:
+    """A prime held at a roof edge by one link (Fig. 9 town, N = 25, seed 7 at 240 s)."""
+    off, _, dist_off = run_deadlock(900, help_after_s=None, stall_timeout_s=None)
+    assert off["targets_reached"] == 0 and off["targets_dropped"] == 0
+    last_30_s = dist_off[-30:]  # positions are recorded every 10 steps (1 s)
+    assert last_30_s.min() > 1.8  # never within Rz in 90 s, ...
+    assert abs(last_30_s[-1] - last_30_s[0]) < 0.5  # ... and no longer getting closer
+    on, rec, _ = run_deadlock(900)
+    assert on["targets_reached"] == 1 and on["completion_time_s"] < 90.0
+    assert on["connected_all_steps"] and on["min_lambda2_weighted"] > 0
+    assert on["collisions"] == 0
+    asked = [e for e in rec.events if e["kind"] == "help_requested"]
+    assert asked and all(e["robot"] == 7 for e in asked)
+    assert on["help_requests"] >= 1 and on["helper_robot_s"] > 0
