@@ -96,9 +96,9 @@ class MultiTargetParams(ConnectivityStrategyParams):
     )
     stall_timeout_s: float | None = Field(default=60.0, gt=0)
     help_after_s: float | None = Field(
-        default=10.0, gt=0, description="a stalled prime asks for help (None: never)"
+        default=20.0, gt=0, description="a stalled prime asks for help (None: never)"
     )
-    help_max_hops: int = Field(default=4, ge=1)
+    help_max_hops: int = Field(default=2, ge=1)
     max_travel_force_n: float = Field(default=10.0, gt=0)
     election_criterion: Literal["path_length", "distance"] = "path_length"
     messages: MessagesConfig = Field(default_factory=MessagesConfig)
