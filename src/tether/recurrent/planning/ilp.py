@@ -132,8 +132,8 @@ def solve_ilp(
     else:
         values, proven, bound, more = run(model, hint, left)
     stats.update(more)
-    stats["incumbent_utility"] = (
-        0.0 if hint is None else float(problem.utility[list(hint[0])].sum())
+    stats["incumbent_utility"] = (  # the hint is indexed on the reduced graph
+        0.0 if hint is None else float(problem.utility[keep[sorted(hint[0])]].sum())
     )
     local = _decode(model, values)
     verts = {int(keep[v]) for v in local}

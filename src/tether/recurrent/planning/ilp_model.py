@@ -13,6 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow, shortest_path
 
+from tether import jit
 from tether.recurrent.planning.apx import SharedSteiner
 from tether.recurrent.planning.problem import Problem
 
@@ -88,6 +89,7 @@ class DirectedCutModel:
         tail = np.concatenate([i, j[~root_edge]])
         head = np.concatenate([j, i[~root_edge]])
         self.tail, self.head = tail, head
+        self.tail_i64, self.head_i64 = tail.astype(np.int64), head.astype(np.int64)
         self.n_arcs = len(tail)
         self.utility = problem.utility[keep]
         self.budget = problem.budget
@@ -107,6 +109,13 @@ class DirectedCutModel:
         self.csr_indices = head[self.csr_order].astype(np.int32)
         self.csr_indptr = np.concatenate([[0], np.cumsum(np.bincount(tail, minlength=n))]).astype(
             np.int32
+        )
+        # the arcs leaving / entering each vertex, for the compiled max-flow
+        self.out_ptr = self.csr_indptr.astype(np.int64)
+        self.out_flat = self.csr_order.astype(np.int64)
+        self.in_flat = np.argsort(head, kind="stable").astype(np.int64)
+        self.in_ptr = np.concatenate([[0], np.cumsum(np.bincount(head, minlength=n))]).astype(
+            np.int64
         )
 
     def ycol(self, v: int) -> int:
@@ -219,7 +228,7 @@ class DirectedCutModel:
             done += 1
             c = cap.copy()
             for _ in range(NESTED):
-                flow, inside, back = self._min_cut(c, int(t))
+                flow, inside, back = self._min_cut(c, int(t), yv[t] - 1e-4)
                 if flow >= yv[t] - 1e-4:
                     break
                 for mask in (inside, back):
@@ -249,12 +258,24 @@ class DirectedCutModel:
             wide = new
         return wide
 
-    def _min_cut(self, cap: np.ndarray, t: int) -> tuple[float, np.ndarray, np.ndarray]:
+    def _min_cut(
+        self, cap: np.ndarray, t: int, enough: float = np.inf
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Max-flow ``b -> t``; sink sides of the source-nearest and back cuts.
 
         The CSR layout of the arcs is built once (zero capacities stay as
-        explicit entries), so each call only fills in the capacities.
+        explicit entries), so each call only fills in the capacities. With
+        :func:`tether.jit.enabled`, the compiled kernel of :mod:`.ilp_kernels`
+        finds the same cuts; it may stop once the flow reaches ``enough`` (then
+        the masks are not computed: no cut is wanted).
         """
+        if jit.enabled():
+            from tether.recurrent.planning.ilp_kernels import min_cut_kernel
+
+            return min_cut_kernel(
+                self.tail_i64, self.head_i64, self.out_ptr, self.out_flat, self.in_ptr,
+                self.in_flat, cap, t, enough, float(SCALE),
+            )  # fmt: skip
         g = sp.csr_matrix(
             (cap[self.csr_order].astype(np.int32), self.csr_indices, self.csr_indptr),
             shape=(self.n, self.n),
