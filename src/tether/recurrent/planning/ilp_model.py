@@ -11,10 +11,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, maximum_flow, shortest_path
+from scipy.sparse.csgraph import breadth_first_order, shortest_path
 
-from tether import jit
 from tether.recurrent.planning.apx import SharedSteiner
+from tether.recurrent.planning.ilp_flow import FlowGraph
 from tether.recurrent.planning.problem import Problem
 
 EPS = 1e-6
@@ -89,7 +89,6 @@ class DirectedCutModel:
         tail = np.concatenate([i, j[~root_edge]])
         head = np.concatenate([j, i[~root_edge]])
         self.tail, self.head = tail, head
-        self.tail_i64, self.head_i64 = tail.astype(np.int64), head.astype(np.int64)
         self.n_arcs = len(tail)
         self.utility = problem.utility[keep]
         self.budget = problem.budget
@@ -104,19 +103,7 @@ class DirectedCutModel:
         self.rev = np.array(
             [pair.get((int(h), int(t)), -1) for t, h in zip(tail, head, strict=True)]
         )
-        # CSR layout of the arcs, fixed for every max-flow (only capacities change)
-        self.csr_order = np.lexsort((head, tail))
-        self.csr_indices = head[self.csr_order].astype(np.int32)
-        self.csr_indptr = np.concatenate([[0], np.cumsum(np.bincount(tail, minlength=n))]).astype(
-            np.int32
-        )
-        # the arcs leaving / entering each vertex, for the compiled max-flow
-        self.out_ptr = self.csr_indptr.astype(np.int64)
-        self.out_flat = self.csr_order.astype(np.int64)
-        self.in_flat = np.argsort(head, kind="stable").astype(np.int64)
-        self.in_ptr = np.concatenate([[0], np.cumsum(np.bincount(head, minlength=n))]).astype(
-            np.int64
-        )
+        self.flow = FlowGraph(tail, head, n)  # max-flow layout, built once
 
     def ycol(self, v: int) -> int:
         return self.n_arcs + v - 1
@@ -261,36 +248,8 @@ class DirectedCutModel:
     def _min_cut(
         self, cap: np.ndarray, t: int, enough: float = np.inf
     ) -> tuple[float, np.ndarray, np.ndarray]:
-        """Max-flow ``b -> t``; sink sides of the source-nearest and back cuts.
-
-        The CSR layout of the arcs is built once (zero capacities stay as
-        explicit entries), so each call only fills in the capacities. With
-        :func:`tether.jit.enabled`, the compiled kernel of :mod:`.ilp_kernels`
-        finds the same cuts; it may stop once the flow reaches ``enough`` (then
-        the masks are not computed: no cut is wanted).
-        """
-        if jit.enabled():
-            from tether.recurrent.planning.ilp_kernels import min_cut_kernel
-
-            return min_cut_kernel(
-                self.tail_i64, self.head_i64, self.out_ptr, self.out_flat, self.in_ptr,
-                self.in_flat, cap, t, enough, float(SCALE),
-            )  # fmt: skip
-        g = sp.csr_matrix(
-            (cap[self.csr_order].astype(np.int32), self.csr_indices, self.csr_indptr),
-            shape=(self.n, self.n),
-        )
-        res = maximum_flow(g, 0, t, method="dinic")
-        resid = (g - res.flow).tocsr()
-        resid.data = (resid.data > 0).astype(np.int8)
-        resid.eliminate_zeros()
-        src_side = np.zeros(self.n, dtype=bool)
-        src_side[breadth_first_order(resid, 0, directed=True, return_predecessors=False)] = True
-        sink_side = np.zeros(self.n, dtype=bool)
-        sink_side[
-            breadth_first_order(resid.T.tocsr(), t, directed=True, return_predecessors=False)
-        ] = True
-        return res.flow_value / SCALE, ~src_side, sink_side
+        """Max-flow ``b -> t``; sink sides of the source-nearest and back cuts."""
+        return self.flow.min_cut(cap, t, SCALE, enough)
 
 
 def frontier_conflicts(problem: Problem, keep: np.ndarray, max_size: int) -> list[np.ndarray]:
