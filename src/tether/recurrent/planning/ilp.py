@@ -47,7 +47,12 @@ from tether.recurrent.planning.ilp_model import (
     frontier_conflicts,
     reduce_dominated,
 )
+from tether.recurrent.planning.ilp_node import NodeSeparatorModel
 from tether.recurrent.planning.problem import UNREACHABLE, Problem
+
+#: ``"node"``: vertex variables and node-separator cuts (:mod:`.ilp_node`);
+#: ``"arc"``: the directed-cut model of the paper's (4) (:mod:`.ilp_model`)
+FORMULATION = "node"
 
 
 def _incumbent(problem: Problem, keep: np.ndarray) -> tuple[set[int], dict[int, int]] | None:
@@ -75,7 +80,7 @@ def _incumbent(problem: Problem, keep: np.ndarray) -> tuple[set[int], dict[int, 
     return verts, parent
 
 
-def _decode(model: DirectedCutModel, values: np.ndarray) -> set[int]:
+def _decode(model: DirectedCutModel | NodeSeparatorModel, values: np.ndarray) -> set[int]:
     y = values[model.n_arcs :]
     return {0} | {int(v) for v in np.flatnonzero(y > 0.5) + 1}
 
@@ -105,7 +110,7 @@ def solve_ilp(
     keep = reduce_dominated(problem)
     if out_of_time():  # the phases before the solver are not interrupted, but checked
         return skipped
-    model = DirectedCutModel(problem, keep)
+    model = (NodeSeparatorModel if FORMULATION == "node" else DirectedCutModel)(problem, keep)
     if out_of_time():
         return skipped
     if CONFLICT_SIZE >= 2:

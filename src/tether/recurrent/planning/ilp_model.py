@@ -79,6 +79,9 @@ def reduce_dominated(problem: Problem) -> np.ndarray:
 class DirectedCutModel:
     """Arrays describing the ILP; columns are ``x_0..x_{A-1}`` then ``y_1..y_{n-1}``."""
 
+    #: ``y`` appears in cuts (4) only with a negative sign (SCIP's variable locks)
+    y_both_ways = False
+
     def __init__(self, problem: Problem, keep: np.ndarray) -> None:
         self.keep = keep
         n = self.n = len(keep)

@@ -13,6 +13,7 @@ import numpy as np
 from pyscipopt import SCIP_PARAMSETTING, SCIP_RESULT, Conshdlr, Model, quicksum
 
 from tether.recurrent.planning.ilp_model import DirectedCutModel
+from tether.recurrent.planning.ilp_node import NodeSeparatorModel
 
 SCIP_PARAMS: dict = {
     # strong branching is most of the time of the instances that branch; capping the
@@ -24,7 +25,7 @@ SCIP_QUIET = True
 
 
 class _DirectedCuts(Conshdlr):
-    def __init__(self, dm: DirectedCutModel, variables: list) -> None:
+    def __init__(self, dm: DirectedCutModel | NodeSeparatorModel, variables: list) -> None:
         self.dm = dm
         self.vars = variables
         self.n_cuts = 0
@@ -85,12 +86,16 @@ class _DirectedCuts(Conshdlr):
         m = self.model
         for a in range(self.dm.n_arcs):  # lowering x may violate (4)
             m.addVarLocksType(self.vars[a], locktype, nlockspos, nlocksneg)
-        for v in range(1, self.dm.n):  # raising y may violate (4)
-            m.addVarLocksType(self.vars[self.dm.ycol(v)], locktype, nlocksneg, nlockspos)
+        both = nlockspos + nlocksneg
+        for v in range(1, self.dm.n):  # raising y may violate (4); in a separator, lowering too
+            if self.dm.y_both_ways:
+                m.addVarLocksType(self.vars[self.dm.ycol(v)], locktype, both, both)
+            else:
+                m.addVarLocksType(self.vars[self.dm.ycol(v)], locktype, nlocksneg, nlockspos)
 
 
 def solve_scip(
-    dm: DirectedCutModel, hint, time_limit_s: float | None
+    dm: DirectedCutModel | NodeSeparatorModel, hint, time_limit_s: float | None
 ) -> tuple[np.ndarray, bool, float, dict]:
     m = Model("configuration")
     m.hideOutput(SCIP_QUIET)
