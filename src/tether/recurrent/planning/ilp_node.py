@@ -36,6 +36,9 @@ from tether.recurrent.planning.ilp_flow import FlowGraph
 from tether.recurrent.planning.ilp_model import NESTED, SCALE
 from tether.recurrent.planning.problem import Problem
 
+MAX_TARGETS = 200  # sinks tried per separation round, by decreasing y
+SKIP_COVERED = True  # no max-flow for a sink behind a cut found in this round
+
 Rows = tuple[list[np.ndarray], list[np.ndarray], list[float], list[float]]
 
 
@@ -126,9 +129,10 @@ class NodeSeparatorModel:
         return cuts
 
     def separate_fractional(
-        self, x: np.ndarray, y: np.ndarray, max_targets: int = 200
+        self, x: np.ndarray, y: np.ndarray, max_targets: int | None = None
     ) -> list[tuple[np.ndarray, int]]:
         """Max-flow separation of (4') with nested and back cuts."""
+        max_targets = MAX_TARGETS if max_targets is None else max_targets
         n = self.n
         yv = np.concatenate([[1.0], np.clip(y, 0.0, 1.0)])
         cap = np.full(len(self.flow.tail), self.big, dtype=np.int64)
@@ -138,8 +142,9 @@ class NodeSeparatorModel:
         cuts: list[tuple[np.ndarray, int]] = []
         seen: set[bytes] = set()
         done = 0
+        covered = np.zeros(n, dtype=bool)
         for t in np.argsort(-yv, kind="stable"):
-            if t == 0 or yv[t] < 1e-4 or self.root_linked[t]:
+            if t == 0 or yv[t] < 1e-4 or self.root_linked[t] or covered[t]:
                 continue
             if wide[t] >= yv[t]:  # one path carries y_t: no separator is violated
                 continue
@@ -151,6 +156,8 @@ class NodeSeparatorModel:
                 flow, inside, back = self.flow.min_cut(c, int(t), SCALE, yv[t] - 1e-4)
                 if flow >= yv[t] - 1e-4:
                     break
+                if SKIP_COVERED:  # the round has a cut, so it is not the last one
+                    covered |= inside[:n]
                 for mask in (inside, back):
                     sep = np.flatnonzero(~mask[:n] & mask[n:])
                     key = sep.tobytes() + int(t).to_bytes(4, "little")
