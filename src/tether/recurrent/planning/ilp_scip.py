@@ -26,6 +26,7 @@ SCIP_PARAMS: dict = {
 }
 SCIP_QUIET = True
 HEURISTICS_OFF = True  # the APX incumbent is near-optimal (measured)
+SEPARATING: str | None = None  # a SCIP_PARAMSETTING name for SCIP's own separators
 
 
 class _DirectedCuts(Conshdlr):
@@ -105,6 +106,8 @@ def solve_scip(
     m.hideOutput(SCIP_QUIET)
     if HEURISTICS_OFF:
         m.setHeuristics(SCIP_PARAMSETTING.OFF)
+    if SEPARATING is not None:
+        m.setSeparating(getattr(SCIP_PARAMSETTING, SEPARATING))
     for key, val in SCIP_PARAMS.items():
         m.setParam(key, val)
     m.setParam("parallel/maxnthreads", 1)
