@@ -133,3 +133,29 @@ def test_node_separation_same_cuts_with_kernel(seed: int) -> None:
         for (a, k), (b, j) in zip(ref, got, strict=True):
             assert k == j and np.array_equal(a, b)
             assert y[a].sum() < y[dm.ycol(k)] - 1e-6  # violated
+
+
+@pytest.mark.parametrize("kernel", [False, True] if jit.available() else [False])
+def test_minimal_separator(kernel: bool) -> None:
+    dm = _model(1)
+    g = nx.from_scipy_sparse_array(dm.adj)
+    rng = np.random.default_rng(0)
+    checked = 0
+    for t in range(1, dm.n):
+        if dm.root_linked[t]:
+            continue
+        # a separator with extra vertices: N(t) plus random others (not 0, not t)
+        extra = rng.choice(np.arange(1, dm.n), size=10, replace=False)
+        sep = np.union1d(dm.adj[t].indices, extra[extra != t])
+        sep = sep[sep != 0]
+        with jit.using(kernel):
+            got = dm.minimal(sep, t)
+        assert set(got) <= set(sep)
+        rest = g.subgraph(set(range(dm.n)) - set(got))
+        assert t not in nx.node_connected_component(rest, 0)  # still separates
+        side_b = nx.node_connected_component(rest, 0)
+        side_t = nx.node_connected_component(rest, t)
+        for v in got:  # minimal: every vertex next to both sides
+            assert set(g[v]) & side_b and set(g[v]) & side_t
+        checked += 1
+    assert checked > 5

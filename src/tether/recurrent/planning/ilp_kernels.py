@@ -1,4 +1,4 @@
-"""Compiled max-flow for the separation of the cut constraints (4) (numba).
+"""Compiled max-flow and minimal separators for the ILP's cut separation (numba).
 
 The same minimum cuts as :meth:`tether.recurrent.planning.ilp_model.DirectedCutModel._min_cut`
 (scipy's ``maximum_flow`` on a sparse matrix rebuilt for every sink), found by
@@ -139,6 +139,42 @@ def min_cut_kernel(tail, head, out_ptr, out_arcs, in_ptr, in_arcs, cap, t, enoug
     return total / scale, inside, back
 
 
+@njit(cache=True)
+def minimal_separator_kernel(indptr, indices, sep, t):  # noqa: ANN001, ANN201
+    """:meth:`NodeSeparatorModel.minimal`: the vertices of ``sep`` next to both sides.
+
+    ``indptr``/``indices`` are the CSR adjacency; ``sep`` separates vertex 0 from
+    ``t``. Keeps those with a neighbour in the component of ``t`` in the graph
+    without ``sep``, then of those, those with a neighbour in the component of 0.
+    """
+    n = len(indptr) - 1
+    removed = np.zeros(n, np.bool_)
+    for v in sep:
+        removed[v] = True
+    seen = np.zeros(n, np.bool_)
+    near = np.zeros(n, np.bool_)
+    queue = np.empty(n, np.int64)
+    for start in (t, 0):
+        seen[:] = False
+        near[:] = False
+        seen[start] = True
+        queue[0] = start
+        lo, hi = 0, 1
+        while lo < hi:
+            u = queue[lo]
+            lo += 1
+            for k in range(indptr[u], indptr[u + 1]):
+                w = indices[k]
+                near[w] = True
+                if not seen[w] and not removed[w]:
+                    seen[w] = True
+                    queue[hi] = w
+                    hi += 1
+        for v in range(n):
+            removed[v] = removed[v] and near[v]
+    return np.flatnonzero(removed)
+
+
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernel on a three-vertex graph."""
     tail = np.array([0, 1, 0, 2], dtype=np.int64)
@@ -149,3 +185,6 @@ def warm_up() -> None:
     in_arcs = np.array([0, 3, 1, 2], dtype=np.int64)
     cap = np.array([5, 3, 1, 0], dtype=np.int64)
     min_cut_kernel(tail, head, out_ptr, out_arcs, in_ptr, in_arcs, cap, 2, 1.0, 10.0)
+    indptr = np.array([0, 1, 3, 4], dtype=np.int32)  # the path 0 - 1 - 2
+    indices = np.array([1, 0, 2, 1], dtype=np.int32)
+    minimal_separator_kernel(indptr, indices, np.array([1], dtype=np.int64), 2)
