@@ -1,6 +1,13 @@
-"""Exact optimal configurations: the directed-cut ILP of Banfi et al., eqs. (2)-(4).
+"""Exact optimal configurations: the ILP of Banfi et al., eqs. (2)-(4).
 
-Model on the transformed graph of Sec. IV-A (root ``b`` = index 0, arcs in
+Two models with the same optimum, chosen by :data:`FORMULATION`: the
+node-separator model of :mod:`.ilp_node` (the default: vertex variables only,
+(4) on vertex separators; measured 5-10 times faster, see
+``docs/recurrent_planning.md``) and the paper's directed-cut model below
+(:mod:`.ilp_model`). Both share the reductions, the APX incumbent and the
+backends.
+
+Directed-cut model on the transformed graph of Sec. IV-A (root ``b`` = index 0, arcs in
 both directions except into ``b``), solved by branch-and-cut:
 
     max  sum_f U(f) y_f                                        (2)
