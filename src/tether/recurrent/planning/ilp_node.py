@@ -78,7 +78,11 @@ class NodeSeparatorModel:
         return v - 1
 
     def base_rows(self) -> Rows:
-        """The budget (3) and (4') for the neighbourhood of every vertex not linked to ``b``."""
+        """Initial rows ``(cols, coefs, lower, upper)``: the budget (3) and (4') on neighbourhoods.
+
+        (4') with ``N = N(k)`` for every vertex ``k`` not linked to ``b``, and the
+        frontier conflict rows of :data:`.ilp_model.CONFLICT_SIZE` (off by default).
+        """
         cols = [np.arange(self.n_cols)]
         vals = [np.ones(self.n_cols)]
         lo, hi = [-np.inf], [float(self.budget)]
@@ -90,6 +94,11 @@ class NodeSeparatorModel:
                 vals.append(v)
                 lo.append(0.0)
                 hi.append(np.inf)
+        for group in self.conflicts:  # frontier sets no tree within budget can hold (off)
+            cols.append(np.asarray(group, dtype=np.intp) - 1)
+            vals.append(np.ones(len(group)))
+            lo.append(-np.inf)
+            hi.append(float(len(group) - 1))
         return cols, vals, lo, hi
 
     def cut_row(self, cols: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
