@@ -43,6 +43,7 @@ KERNEL_MODULES = (
     "graph/kernels.py",
     "graph/grid_kernels.py",
     "recurrent/planning/steiner_kernels.py",
+    "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",
     "sensing/robots_kernels.py",
 )

@@ -428,6 +428,9 @@ def warm_up() -> float:
     from tether.recurrent.planning.steiner_kernels import warm_up as steiner_warm_up
 
     steiner_warm_up()
+    from tether.recurrent.planning.ilp_kernels import warm_up as ilp_warm_up
+
+    ilp_warm_up()
     from tether.silent.steering_kernels import warm_up as steering_warm_up
 
     steering_warm_up()

@@ -1,6 +1,13 @@
-"""Exact optimal configurations: the directed-cut ILP of Banfi et al., eqs. (2)-(4).
+"""Exact optimal configurations: the ILP of Banfi et al., eqs. (2)-(4).
 
-Model on the transformed graph of Sec. IV-A (root ``b`` = index 0, arcs in
+Two models with the same optimum, chosen by :data:`FORMULATION`: the
+node-separator model of :mod:`.ilp_node` (the default: vertex variables only,
+(4) on vertex separators; about 10 times faster on the benchmark, see
+``docs/recurrent_planning.md``) and the paper's directed-cut model below
+(:mod:`.ilp_model`). Both share the reductions, the APX incumbent and the
+backends.
+
+Directed-cut model on the transformed graph of Sec. IV-A (root ``b`` = index 0, arcs in
 both directions except into ``b``), solved by branch-and-cut:
 
     max  sum_f U(f) y_f                                        (2)
@@ -47,7 +54,12 @@ from tether.recurrent.planning.ilp_model import (
     frontier_conflicts,
     reduce_dominated,
 )
+from tether.recurrent.planning.ilp_node import NodeSeparatorModel
 from tether.recurrent.planning.problem import UNREACHABLE, Problem
+
+#: ``"node"``: vertex variables and node-separator cuts (:mod:`.ilp_node`);
+#: ``"arc"``: the directed-cut model of the paper's (4) (:mod:`.ilp_model`)
+FORMULATION = "node"
 
 
 def _incumbent(problem: Problem, keep: np.ndarray) -> tuple[set[int], dict[int, int]] | None:
@@ -75,7 +87,7 @@ def _incumbent(problem: Problem, keep: np.ndarray) -> tuple[set[int], dict[int, 
     return verts, parent
 
 
-def _decode(model: DirectedCutModel, values: np.ndarray) -> set[int]:
+def _decode(model: DirectedCutModel | NodeSeparatorModel, values: np.ndarray) -> set[int]:
     y = values[model.n_arcs :]
     return {0} | {int(v) for v in np.flatnonzero(y > 0.5) + 1}
 
@@ -105,7 +117,7 @@ def solve_ilp(
     keep = reduce_dominated(problem)
     if out_of_time():  # the phases before the solver are not interrupted, but checked
         return skipped
-    model = DirectedCutModel(problem, keep)
+    model = (NodeSeparatorModel if FORMULATION == "node" else DirectedCutModel)(problem, keep)
     if out_of_time():
         return skipped
     if CONFLICT_SIZE >= 2:
@@ -132,8 +144,8 @@ def solve_ilp(
     else:
         values, proven, bound, more = run(model, hint, left)
     stats.update(more)
-    stats["incumbent_utility"] = (
-        0.0 if hint is None else float(problem.utility[list(hint[0])].sum())
+    stats["incumbent_utility"] = (  # the hint is indexed on the reduced graph
+        0.0 if hint is None else float(problem.utility[keep[sorted(hint[0])]].sum())
     )
     local = _decode(model, values)
     verts = {int(keep[v]) for v in local}

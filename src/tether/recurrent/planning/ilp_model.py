@@ -11,9 +11,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, maximum_flow, shortest_path
+from scipy.sparse.csgraph import breadth_first_order, shortest_path
 
 from tether.recurrent.planning.apx import SharedSteiner
+from tether.recurrent.planning.ilp_flow import FlowGraph
 from tether.recurrent.planning.problem import Problem
 
 EPS = 1e-6
@@ -78,6 +79,9 @@ def reduce_dominated(problem: Problem) -> np.ndarray:
 class DirectedCutModel:
     """Arrays describing the ILP; columns are ``x_0..x_{A-1}`` then ``y_1..y_{n-1}``."""
 
+    #: ``y`` appears in cuts (4) only with a negative sign (SCIP's variable locks)
+    y_both_ways = False
+
     def __init__(self, problem: Problem, keep: np.ndarray) -> None:
         self.keep = keep
         n = self.n = len(keep)
@@ -102,12 +106,7 @@ class DirectedCutModel:
         self.rev = np.array(
             [pair.get((int(h), int(t)), -1) for t, h in zip(tail, head, strict=True)]
         )
-        # CSR layout of the arcs, fixed for every max-flow (only capacities change)
-        self.csr_order = np.lexsort((head, tail))
-        self.csr_indices = head[self.csr_order].astype(np.int32)
-        self.csr_indptr = np.concatenate([[0], np.cumsum(np.bincount(tail, minlength=n))]).astype(
-            np.int32
-        )
+        self.flow = FlowGraph(tail, head, n)  # max-flow layout, built once
 
     def ycol(self, v: int) -> int:
         return self.n_arcs + v - 1
@@ -219,7 +218,7 @@ class DirectedCutModel:
             done += 1
             c = cap.copy()
             for _ in range(NESTED):
-                flow, inside, back = self._min_cut(c, int(t))
+                flow, inside, back = self._min_cut(c, int(t), yv[t] - 1e-4)
                 if flow >= yv[t] - 1e-4:
                     break
                 for mask in (inside, back):
@@ -249,27 +248,11 @@ class DirectedCutModel:
             wide = new
         return wide
 
-    def _min_cut(self, cap: np.ndarray, t: int) -> tuple[float, np.ndarray, np.ndarray]:
-        """Max-flow ``b -> t``; sink sides of the source-nearest and back cuts.
-
-        The CSR layout of the arcs is built once (zero capacities stay as
-        explicit entries), so each call only fills in the capacities.
-        """
-        g = sp.csr_matrix(
-            (cap[self.csr_order].astype(np.int32), self.csr_indices, self.csr_indptr),
-            shape=(self.n, self.n),
-        )
-        res = maximum_flow(g, 0, t, method="dinic")
-        resid = (g - res.flow).tocsr()
-        resid.data = (resid.data > 0).astype(np.int8)
-        resid.eliminate_zeros()
-        src_side = np.zeros(self.n, dtype=bool)
-        src_side[breadth_first_order(resid, 0, directed=True, return_predecessors=False)] = True
-        sink_side = np.zeros(self.n, dtype=bool)
-        sink_side[
-            breadth_first_order(resid.T.tocsr(), t, directed=True, return_predecessors=False)
-        ] = True
-        return res.flow_value / SCALE, ~src_side, sink_side
+    def _min_cut(
+        self, cap: np.ndarray, t: int, enough: float = np.inf
+    ) -> tuple[float, np.ndarray, np.ndarray]:
+        """Max-flow ``b -> t``; sink sides of the source-nearest and back cuts."""
+        return self.flow.min_cut(cap, t, SCALE, enough)
 
 
 def frontier_conflicts(problem: Problem, keep: np.ndarray, max_size: int) -> list[np.ndarray]:

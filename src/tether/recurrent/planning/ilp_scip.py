@@ -13,18 +13,24 @@ import numpy as np
 from pyscipopt import SCIP_PARAMSETTING, SCIP_RESULT, Conshdlr, Model, quicksum
 
 from tether.recurrent.planning.ilp_model import DirectedCutModel
+from tether.recurrent.planning.ilp_node import NodeSeparatorModel
 
 SCIP_PARAMS: dict = {
     # strong branching is most of the time of the instances that branch; capping the
     # simplex iterations per candidate when initialising pseudocosts cut the CPU time
     # of 10 exploration instances (seeds 0, 4, 6-13) from 31 s to 23 s, hardest 12.5 -> 6.3 s
     "branching/relpscost/inititer": 10,
+    # node model: the aggregation (c-MIR) separator ran in every root round and found
+    # nearly nothing (seed 1: 0.31 s, 3 cuts); off: seeds 0-4 median 0.35 -> 0.29 s CPU
+    "separating/aggregation/freq": -1,
 }
 SCIP_QUIET = True
+HEURISTICS_OFF = True  # the APX incumbent is near-optimal (measured)
+SEPARATING: str | None = None  # a SCIP_PARAMSETTING name for SCIP's own separators
 
 
 class _DirectedCuts(Conshdlr):
-    def __init__(self, dm: DirectedCutModel, variables: list) -> None:
+    def __init__(self, dm: DirectedCutModel | NodeSeparatorModel, variables: list) -> None:
         self.dm = dm
         self.vars = variables
         self.n_cuts = 0
@@ -85,16 +91,23 @@ class _DirectedCuts(Conshdlr):
         m = self.model
         for a in range(self.dm.n_arcs):  # lowering x may violate (4)
             m.addVarLocksType(self.vars[a], locktype, nlockspos, nlocksneg)
-        for v in range(1, self.dm.n):  # raising y may violate (4)
-            m.addVarLocksType(self.vars[self.dm.ycol(v)], locktype, nlocksneg, nlockspos)
+        both = nlockspos + nlocksneg
+        for v in range(1, self.dm.n):  # raising y may violate (4); in a separator, lowering too
+            if self.dm.y_both_ways:
+                m.addVarLocksType(self.vars[self.dm.ycol(v)], locktype, both, both)
+            else:
+                m.addVarLocksType(self.vars[self.dm.ycol(v)], locktype, nlocksneg, nlockspos)
 
 
 def solve_scip(
-    dm: DirectedCutModel, hint, time_limit_s: float | None
+    dm: DirectedCutModel | NodeSeparatorModel, hint, time_limit_s: float | None
 ) -> tuple[np.ndarray, bool, float, dict]:
     m = Model("configuration")
     m.hideOutput(SCIP_QUIET)
-    m.setHeuristics(SCIP_PARAMSETTING.OFF)  # the APX incumbent is near-optimal (measured)
+    if HEURISTICS_OFF:
+        m.setHeuristics(SCIP_PARAMSETTING.OFF)
+    if SEPARATING is not None:
+        m.setSeparating(getattr(SCIP_PARAMSETTING, SEPARATING))
     for key, val in SCIP_PARAMS.items():
         m.setParam(key, val)
     m.setParam("parallel/maxnthreads", 1)
