@@ -33,6 +33,7 @@ from tether.continuous.placement import safe_team
 from tether.continuous.reference_filter import ReferenceFilter
 from tether.continuous.roles import ANCHOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
 from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.continuous.substep import fused_total_force
 from tether.continuous.targets import TargetBook
 from tether.continuous.travel import (
     alignment,
@@ -170,21 +171,42 @@ def _traveling_forces_kernel(
     anchors: tuple[np.ndarray, np.ndarray],
 ) -> np.ndarray:
     """:func:`traveling_forces` in one call of the compiled kernel (same bits)."""
-    from tether.continuous.tracking import TIE_M
     from tether.continuous.tracking_kernels import traveling_kernel
+
+    return traveling_kernel(np.ascontiguousarray(q), np.ascontiguousarray(v),
+                            np.ascontiguousarray(f_lambda),
+                            *travel_args(planner, lambda_hat, p, anchors),
+                            *travel_gains(p))  # fmt: skip
+
+
+def travel_args(
+    planner: RolePlanner,
+    lambda_hat: np.ndarray,
+    p: MultiTargetParams,
+    anchors: tuple[np.ndarray, np.ndarray],
+) -> tuple:
+    """The traveling kernel's arguments after ``f_lambda`` that a control period fixes.
+
+    The travelers, which of them are secondaries, ``Lambda_hat``, the anchored robots
+    and their targets, the paths' kernel arrays, ``v_cruise``, the tie width and
+    :func:`~tether.world.clearance.einsum_order`.
+    """
+    from tether.continuous.tracking import TIE_M
     from tether.world.clearance import einsum_order
 
     trav, paths = planner.path_set()
     trav = trav.astype(np.int64)
     held, targets = anchors[0].astype(np.int64), anchors[1]
     path = paths.kernel_args() if len(trav) else _NO_PATHS
-    return traveling_kernel(
-        np.ascontiguousarray(q), np.ascontiguousarray(v), np.ascontiguousarray(f_lambda), trav,
-        planner.role[trav] == SECONDARY, np.ascontiguousarray(lambda_hat, dtype=float), held,
-        np.ascontiguousarray(targets, dtype=float), path, float(p.v_cruise_mps), TIE_M,
-        einsum_order(), p.kp_n_per_m, p.kv_ns_per_m, p.mass_kg, p.damping_ns_per_m,
-        p.max_travel_force_n, p.sigma, p.rz_m, p.kz_n,
-    )  # fmt: skip
+    return (trav, planner.role[trav] == SECONDARY, np.ascontiguousarray(lambda_hat, dtype=float),
+            held, np.ascontiguousarray(targets, dtype=float), path, float(p.v_cruise_mps), TIE_M,
+            einsum_order())  # fmt: skip
+
+
+def travel_gains(p: MultiTargetParams) -> tuple[float, ...]:
+    """``(kp, kv, mass, damping, max_force, sigma, Rz, kz)`` as the traveling kernel takes them."""
+    return (p.kp_n_per_m, p.kv_ns_per_m, p.mass_kg, p.damping_ns_per_m, p.max_travel_force_n,
+            p.sigma, p.rz_m, p.kz_n)  # fmt: skip
 
 
 _i0, _f1, _f2 = np.zeros(1, np.int64), np.zeros(0), np.zeros((0, 3))
@@ -349,11 +371,16 @@ class MultiTargetStrategy(ConnectivityStrategy):
             return traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate,
                                     self.params, anchors=self._held)  # fmt: skip
 
+        fused = None
+        if jit.enabled() and self.estimator is None:  # one compiled call per sub-step
+            fused = fused_total_force(self, travel_args(self.planner, self.consensus.estimate,
+                                                        self.params, self._held),
+                                      travel_gains(self.params))  # fmt: skip
         try:
             q_new, v_new, ev, stats = integrate(
                 q, v, ctx.dt_s, self._evaluate, self._force, external, self.integ,
                 self.conn.lambda2_min, self._current, box=self.world.bounds_m,
-                box_margin_m=self.conn.ro_m,
+                box_margin_m=self.conn.ro_m, total_force=fused,
             )  # fmt: skip
         finally:
             self._held = None
