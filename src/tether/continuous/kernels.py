@@ -356,6 +356,12 @@ def warm_up() -> float:
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
+    from tether.continuous.round_kernels import warm_up as rounds_warm_up
+
+    rounds_warm_up()
+    from tether.comm_kernels import warm_up as comm_warm_up
+
+    comm_warm_up()
     from tether.recurrent.planning.steiner_kernels import warm_up as steiner_warm_up
 
     steiner_warm_up()

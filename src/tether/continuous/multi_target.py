@@ -320,8 +320,15 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     # -- one control period ------------------------------------------------------------
     def _links(self) -> np.ndarray:
+        """The links of the weighted graph; the same array object while they do not change
+        (the message layer then reuses its link bookkeeping)."""
         graph = self._current[1][0]
-        return graph.pairs[graph.pair_factor > 0]
+        links = graph.pairs[graph.pair_factor > 0]
+        last = getattr(self, "_last_links", None)
+        if last is not None and np.array_equal(last, links):
+            return last
+        self._last_links = links
+        return links
 
     def _communicate(self, q: np.ndarray, v: np.ndarray, t_s: float, dt_s: float) -> None:
         p, pl = self.params, self.planner

@@ -32,17 +32,26 @@ def _skip_to(q, r, pa, chord_start, chord_end, k, hi, limit):  # noqa: ANN001, A
 
     A point of segment ``j >= k`` is at most ``chord_end[j] - chord_start[k]`` (the
     polyline's length in between) from the sample ``pa[k]``, so it is farther than
-    ``limit`` from the robot while that is below ``|q_r - pa[k]| - limit``.
+    ``limit`` from the robot while that is below ``|q_r - pa[k]| - limit``. That test
+    is monotone in ``j`` (``chord_end`` never decreases), so the first ``j`` failing it
+    (or ``hi``) is found by bisection: the same ``j`` a scan finds.
     """
     dim = q.shape[1]
     sq = 0.0
     for c in range(dim):
         sq += (q[r, c] - pa[k, c]) ** 2
     reach = math.sqrt(sq) - limit - 1e-9
-    j = k
-    while j < hi and chord_end[j] - chord_start[k] < reach:
-        j += 1
-    return j
+    base = chord_start[k]
+    if not (k < hi and chord_end[k] - base < reach):
+        return k
+    lo, top = k, hi  # the test holds at lo; the answer is in (lo, top]
+    while top - lo > 1:
+        mid = (lo + top) // 2
+        if chord_end[mid] - base < reach:
+            lo = mid
+        else:
+            top = mid
+    return top
 
 
 @njit(cache=True)
