@@ -333,6 +333,10 @@ def warm_up() -> float:
     i, j = pairs[:, 0], pairs[:, 1]
     clear, s, o = index.segment_clearance_kernel(q[i], q[j], 1.75, i * 3 + j)
     index.segment_clearance_kernel(q[i], q[j], 1.75)
+    from tether.world.clearance_kernels import field_below_kernel
+
+    ones = np.ones(3, dtype=np.int64)
+    field_below_kernel(q, np.zeros(1), ones, ones, np.zeros(3), 1.0, 0.5, 1.0)
     out = weights_kernel(q, pairs, True, clear, s, o, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
     pf, dP_di, dP_dj, _, coll, cp, cu, cl = out
     nu = np.array([-0.5, 0.0, 0.5])

@@ -68,7 +68,8 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
     that close are skipped (:func:`_skip_to`, from the cumulative chord lengths); the
     search starts from ``hint[r]`` (last call's segment, updated), which only speeds it
     up. Returns ``s_best``, ``point``, ``distance``, ``remaining``, ``velocity``,
-    ``acceleration``.
+    ``acceleration`` and the path's unit tangent and ``d2p/ds2`` at the closest points
+    (velocity and acceleration are ``v`` and ``v^2`` times them).
     """
     r_count, dim = q.shape
     s_best = np.empty(r_count)
@@ -77,6 +78,8 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
     remaining = np.empty(r_count)
     vel = np.empty((r_count, dim))
     acc = np.empty((r_count, dim))
+    tan = np.empty((r_count, dim))
+    kap = np.empty((r_count, dim))
     rel = np.empty(dim)
     off = np.empty(dim)
     for r in range(r_count):
@@ -114,9 +117,11 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
         v = speed[r] * (1.0 if (lengths[r] - s_max) > 1e-9 else 0.0)
         remaining[r] = max(lengths[r] - s_max, 0.0)
         for c in range(dim):
-            vel[r, c] = v * (ta[pick, c] + t_pick * dta[pick, c])
-            acc[r, c] = (v * v) * (ka[pick, c] + t_pick * dka[pick, c])
-    return s_best, point, dist_out, remaining, vel, acc
+            tan[r, c] = ta[pick, c] + t_pick * dta[pick, c]
+            kap[r, c] = ka[pick, c] + t_pick * dka[pick, c]
+            vel[r, c] = v * tan[r, c]
+            acc[r, c] = (v * v) * kap[r, c]
+    return s_best, point, dist_out, remaining, vel, acc, tan, kap
 
 
 @njit(cache=True)
@@ -141,7 +146,7 @@ def traveling_kernel(  # noqa: ANN201, PLR0913
         for r in range(r_count):
             qt[r] = q[trav[r]]
         speed = np.full(r_count, v_cruise)
-        _, point, _, _, vel, acc = path_states_kernel(
+        _, point, _, _, vel, acc, _, _ = path_states_kernel(
             qt, first, pa, dseg, inv_len2, sa, ds, ta, dta, ka, dka, lengths, speed, tie, order,
             cs, ce, hint,
         )  # fmt: skip
