@@ -354,7 +354,8 @@ def warm_up() -> float:
     for mask in (np.ones((4, 4), dtype=bool), np.ones((4, 4, 4), dtype=bool)):
         shape = np.asarray(mask.shape, dtype=np.int64)
         a = np.full((1, mask.ndim), 0.5)
-        segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5)
+        for field in (np.zeros(0), np.ones(mask.size)):
+            segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5, field, 1.0)
     for obs in (None, index):
         points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
             obs.kernel_state(3)  # fmt: skip
