@@ -213,6 +213,24 @@ def test_fused_substep_force_is_the_chain() -> None:
         total, h = fused_total_force(s, args, travel_gains(s.params))(q, v, cache)
     assert_same(total, ref)
     assert h == ref_h
+    # an external force changed after the traveling force (rows replaced): the same too
+    rows = np.array([0, 3, 5])
+
+    def adjust(qq, vv, f_lambda, f_ext):  # noqa: ANN001, ANN202
+        f_ext = f_ext.copy()
+        f_ext[rows] = 0.5 * (qq[rows] - qq[rows][::-1]) - vv[rows]
+        return f_ext
+
+    with jit.using(False):
+        f_lambda = s._force(cache)
+        f_ext = traveling_forces(q, v, f_lambda, s.planner, s.consensus.estimate, s.params,
+                                 anchors=held)  # fmt: skip
+        ref = f_lambda + adjust(q, v, f_lambda, f_ext)
+        ref_h = displacement_step(v, ref, s.integ.mass_kg, s.integ.max_step_m)
+    with jit.using(True):
+        total, h = fused_total_force(s, args, travel_gains(s.params), adjust)(q, v, cache)
+    assert_same(total, ref)
+    assert h == ref_h
 
 
 def test_path_states_kernel_equals_reference() -> None:

@@ -138,7 +138,8 @@ def total_force_kernel(  # noqa: ANN201, PLR0913
     q, v, graph, nu, lam, potential, travel, trav, secondary, lambda_hat, held, targets, path,
     v_cruise, tie, order, mass, delta,
 ):  # noqa: ANN001  # fmt: skip
-    """``(f_lambda + f_i, h)`` of one sub-step: total force ``(n, dim)`` and displacement step.
+    """``(f_lambda + f_i, h, f_lambda, f_i)`` of one sub-step: the total force ``(n, dim)``,
+    the displacement step and the two forces it sums.
 
     ``graph``: ``(pairs, pair_factor, collision, dP_di, dP_dj, coll_pairs, coll_unit,
     coll_logd)`` of a :class:`~tether.continuous.weights.WeightedGraph`; ``nu``, ``lam``
@@ -159,7 +160,7 @@ def total_force_kernel(  # noqa: ANN201, PLR0913
         kp, kv, m_t, b_t, max_force, sigma, rz, kz,
     )  # fmt: skip
     total = f_lambda + f_ext
-    return total, displacement_kernel(v, total, mass, delta)
+    return total, displacement_kernel(v, total, mass, delta), f_lambda, f_ext
 
 
 def warm_up(q: np.ndarray, pairs: np.ndarray, graph: tuple, nu: np.ndarray) -> None:

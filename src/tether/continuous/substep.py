@@ -13,6 +13,7 @@ eigensolver runs; the reference is the chain itself.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -20,9 +21,15 @@ import numpy as np
 from tether.continuous.dynamics import TotalForce
 from tether.continuous.strategy import ConnectivityStrategy
 
+#: adjust(q, v, f_lambda, f_i) -> f_i: a change of the external force after the kernel
+Adjust = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
 
 def fused_total_force(
-    strategy: ConnectivityStrategy, travel: tuple, gains: tuple[float, ...]
+    strategy: ConnectivityStrategy,
+    travel: tuple,
+    gains: tuple[float, ...],
+    adjust: Adjust | None = None,
 ) -> TotalForce:
     """``total_force(q, v, cache)`` for one control period.
 
@@ -36,8 +43,14 @@ def fused_total_force(
         The traveling kernel's arguments a period fixes
         (:func:`tether.continuous.multi_target.travel_args`) and its gains
         (:func:`tether.continuous.multi_target.travel_gains`).
+    adjust
+        If the strategy's external force is the traveling force changed afterwards (some
+        rows replaced), that change: it gets the kernel's ``f_lambda`` and ``f_i`` and
+        returns the external force; the sum and the step are then made from it as the
+        reference makes them (:func:`~tether.continuous.force_kernels.displacement_kernel`).
+        Without it the fused call would leave the change out.
     """
-    from tether.continuous.force_kernels import total_force_kernel
+    from tether.continuous.force_kernels import displacement_kernel, total_force_kernel
 
     conn, integ = strategy.conn, strategy.integ
     potential = (float(conn.lambda2_min), float(conn.lambda2_null), float(conn.potential_gain))
@@ -49,11 +62,14 @@ def fused_total_force(
         strategy._nu = nu
         arrays = (graph.pairs, graph.pair_factor, graph.collision, graph.dP_di, graph.dP_dj,
                   graph.coll_pairs, graph.coll_unit, graph.coll_logd)  # fmt: skip
-        total, h = total_force_kernel(
+        total, h, f_lambda, f_ext = total_force_kernel(
             np.ascontiguousarray(q), np.ascontiguousarray(v), arrays,
             np.ascontiguousarray(nu, dtype=float), float(lam), potential, gains, *travel, mass,
             delta,
         )  # fmt: skip
+        if adjust is not None:
+            total = f_lambda + adjust(q, v, f_lambda, f_ext)
+            h = displacement_kernel(np.ascontiguousarray(v), total, mass, delta)
         return total, float(h)
 
     return total_force
