@@ -112,7 +112,8 @@ def test_nearest_min_is_the_tree_minimum_where_it_matters() -> None:
     for low in (np.inf, 3.0, 1.0, 0.2):
         q = rng.uniform(0.5, [19.5, 19.5, 7.5], (20, 3))
         want = min(low, float(index.tree.query(q)[0].min()))
-        assert min(low, index.nearest_min(q, low)) == want
+        fast, ref = both(index.nearest_min, q, low)
+        assert min(low, fast) == min(low, ref) == want
 
 
 def _teams(rng: np.random.Generator):  # noqa: ANN202
@@ -183,6 +184,55 @@ def test_subset_solver_is_scipys_eigh() -> None:
         assert_same(vec, vecs[:, 0])
 
 
+def test_fused_substep_force_is_the_chain() -> None:
+    """One compiled call per sub-step (force_kernels.total_force_kernel) = the reference chain."""
+    from tether.config import load_scenario
+    from tether.continuous.dynamics import displacement_step
+    from tether.continuous.multi_target import travel_args, travel_gains, traveling_forces
+    from tether.continuous.roles import SECONDARY
+    from tether.continuous.substep import fused_total_force
+    from tether.runner import build
+    from tether.sim import simulate
+
+    sc = load_scenario("multi_target_office")
+    sc.team.n_robots = 12
+    b = build(sc, sc.seed)
+    with jit.using(True):
+        res = simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=sc.sim.dt_s, max_steps=40,
+                       rng=b.rng)  # fmt: skip
+    s, q, v = b.strategy, res.final_state.positions, res.final_state.velocities
+    assert (s.planner.role == SECONDARY).any()  # travelers with rho(Theta, Lambda_hat)
+    held, cache = s._anchors(), s._current[1]
+    with jit.using(False):
+        f_lambda = s._force(cache)
+        ref = f_lambda + traveling_forces(q, v, f_lambda, s.planner, s.consensus.estimate,
+                                          s.params, anchors=held)  # fmt: skip
+        ref_h = displacement_step(v, ref, s.integ.mass_kg, s.integ.max_step_m)
+    with jit.using(True):
+        args = travel_args(s.planner, s.consensus.estimate, s.params, held)
+        total, h = fused_total_force(s, args, travel_gains(s.params))(q, v, cache)
+    assert_same(total, ref)
+    assert h == ref_h
+    # an external force changed after the traveling force (rows replaced): the same too
+    rows = np.array([0, 3, 5])
+
+    def adjust(qq, vv, f_lambda, f_ext):  # noqa: ANN001, ANN202
+        f_ext = f_ext.copy()
+        f_ext[rows] = 0.5 * (qq[rows] - qq[rows][::-1]) - vv[rows]
+        return f_ext
+
+    with jit.using(False):
+        f_lambda = s._force(cache)
+        f_ext = traveling_forces(q, v, f_lambda, s.planner, s.consensus.estimate, s.params,
+                                 anchors=held)  # fmt: skip
+        ref = f_lambda + adjust(q, v, f_lambda, f_ext)
+        ref_h = displacement_step(v, ref, s.integ.mass_kg, s.integ.max_step_m)
+    with jit.using(True):
+        total, h = fused_total_force(s, args, travel_gains(s.params), adjust)(q, v, cache)
+    assert_same(total, ref)
+    assert h == ref_h
+
+
 def test_path_states_kernel_equals_reference() -> None:
     rng = np.random.default_rng(0)
     paths = []
@@ -202,6 +252,10 @@ def test_path_states_kernel_equals_reference() -> None:
         fast, ref = both(ps.states, q, v)
         for x, y in zip(vars(fast).values(), vars(ref).values(), strict=True):
             assert_same(x, y)
+        other = 0.0 if trial % 3 else rng.uniform(1, 3, len(paths))  # the same q, reused
+        fast, ref = both(ps.states, q, other)
+        for x, y in zip(vars(fast).values(), vars(ref).values(), strict=True):
+            assert_same(x, y)
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -217,6 +271,38 @@ def test_segment_free_kernel_equals_reference(dim: int) -> None:
         b[:5] = a[:5]
         b[5:10, 0] = a[5:10, 0]
         assert_same(*both(segment_free, mask, a, b))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_segment_free_kernel_skips_by_the_distance_field(dim: int) -> None:
+    """With the grid's distance field the kernel reads fewer samples: the same answers."""
+    import numba  # noqa: F401
+    from scipy import ndimage
+
+    rng = np.random.default_rng(10 + dim)
+    world = box_world(rng, dim)
+    grid = world.grid
+    field = grid.distance_field_m  # now made: segments_clear passes it to the kernel
+    free = ~grid.occupied
+    np.testing.assert_array_equal(field, ndimage.distance_transform_edt(free) * 0.5)
+    lo, hi = grid.origin_m, grid.origin_m + np.array(grid.shape) * 0.5
+    for scale in (0.3, 3.0, 12.0):
+        a = rng.uniform(lo - 1, hi + 1, (400, dim))
+        b = a + rng.normal(0, scale, a.shape)
+        b[:5] = a[:5]
+        with jit.using(True):
+            fast = grid.segments_clear(a, b)
+            plain = segment_free(free, (a - lo) * 2.0, (b - lo) * 2.0)
+        with jit.using(False):
+            ref = grid.segments_clear(a, b)
+        assert_same(fast, ref)
+        assert_same(plain, ref)
+        assert ref.any() and not ref.all()
+    empty = OccupancyGrid(np.zeros((10, 10, 4)[:dim], dtype=bool), 0.5, np.zeros(dim))
+    assert np.isinf(empty.distance_field_m).all()  # inf everywhere: the whole segment at once
+    a = rng.uniform(0.1, 1.9, (50, dim))
+    with jit.using(True):
+        assert empty.segments_clear(a, a[::-1] + 0.05).all()
 
 
 def test_switch(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:  # noqa: ANN001

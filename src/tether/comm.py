@@ -28,6 +28,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from tether import jit
+
+_NONE = np.zeros(0)  # no loss draws
+
 
 @dataclass(frozen=True)
 class CommParams:
@@ -148,6 +152,13 @@ class MessageLayer:
 
     def _relink(self, codes: np.ndarray, k: int) -> None:
         """Re-align the mailboxes with a new link set (mail over vanished links is dropped)."""
+        if self._vals.shape[1] == k and jit.enabled():  # the same mailboxes, compiled
+            from tether.comm_kernels import relink_kernel
+
+            self._vals, self._sent_at = relink_kernel(self._codes, self._vals, self._sent_at,
+                                                      codes, self.n)  # fmt: skip
+            self._codes, self._order = codes, np.argsort(codes, kind="stable")
+            return
         vals = np.full((len(codes), k), np.nan)
         sent_at = np.full(len(codes), -1, dtype=np.int64)
         if self._vals.shape[1] == k:
@@ -179,6 +190,18 @@ class MessageLayer:
             if self._vals.shape[1] != k or not np.array_equal(codes, self._codes):
                 self._relink(codes, k)
             self._last_pairs, self._last_links = pairs, (recv, send, codes)
+        if self.params.delay_rounds == 0 and jit.enabled():  # the same round, compiled
+            from tether.comm_kernels import deliver_kernel
+
+            draws = self.rng.random(len(recv)) if self.params.loss_probability > 0 else _NONE
+            sent, delivered, age = deliver_kernel(
+                self._vals, self._sent_at, values, recv, send, self._dead_from, draws,
+                self.params.loss_probability, self.round,
+            )  # fmt: skip
+            self.sent += sent
+            self.delivered += delivered
+            self.round += 1
+            return Inbox(recv, send, self._vals, age)
         alive = self.alive()
         ok = alive[recv] & alive[send]
         self.sent += int(ok.sum())

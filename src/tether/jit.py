@@ -38,6 +38,9 @@ from pathlib import Path
 KERNEL_MODULES = (
     "continuous/kernels.py",
     "continuous/tracking_kernels.py",
+    "continuous/force_kernels.py",
+    "continuous/round_kernels.py",
+    "comm_kernels.py",
     "world/clearance_kernels.py",
     "world/los_kernels.py",
     "graph/kernels.py",

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tether import jit
 from tether.comm import MessageLayer
 
 
@@ -36,6 +37,15 @@ class EfficiencyConsensus:
         if prime >= 0:
             self.estimate[prime] = efficiency
         inbox = self.layer.exchange(pairs, self.estimate[:, None])
+        if jit.enabled():  # the same update, compiled
+            from tether.continuous.round_kernels import consensus_kernel
+
+            new = consensus_kernel(self.estimate, inbox.receiver, inbox.values[:, 0],
+                                   inbox.valid, self.gain_per_s * dt_s)  # fmt: skip
+            if prime >= 0:
+                new[prime] = efficiency
+            self.estimate = new
+            return
         ok = inbox.valid
         recv, diff = inbox.receiver[ok], inbox.values[ok, 0] - self.estimate[inbox.receiver[ok]]
         n = len(self.estimate)

@@ -128,6 +128,8 @@ class IntegrationStats:
 Evaluate = Callable[[np.ndarray], tuple[float, Any]]
 Force = Callable[[Any], np.ndarray]
 External = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+# total_force(q, v, cache) -> (f_lambda + f_i, displacement step): both in one call
+TotalForce = Callable[[np.ndarray, np.ndarray, Any], tuple[np.ndarray, float]]
 
 
 def integrate(
@@ -142,6 +144,7 @@ def integrate(
     current: tuple[float, Any] | None = None,
     box: np.ndarray | None = None,
     box_margin_m: float = 0.0,
+    total_force: TotalForce | None = None,
 ) -> tuple[np.ndarray, np.ndarray, tuple[float, Any], IntegrationStats]:
     """Advance eq. (1) by ``dt_s`` with adaptive sub-steps.
 
@@ -167,6 +170,10 @@ def integrate(
     box, box_margin_m
         ``(2, dim)`` lower and upper corners of the world, kept ``box_margin_m``
         away (see :func:`stay_inside`); ``None`` for unbounded space.
+    total_force
+        ``total_force(q, v, cache) -> (f_lambda + f_i, h)``: the sum of ``force`` and
+        ``external`` and the displacement rule's step in one call, with the same values
+        (a compiled fast path); ``force`` and ``external`` are then not called.
 
     Returns
     -------
@@ -176,18 +183,23 @@ def integrate(
     m, b = params.mass_kg, params.damping_ns_per_m
     ev = current if current is not None else evaluate(q)
     t = 0.0
-    kernels = jit.enabled()  # the same arithmetic, compiled (tether.continuous.kernels)
+    kernels = jit.enabled()  # the same arithmetic, compiled (tether.continuous.force_kernels)
     if kernels:
-        from tether.continuous.kernels import displacement_kernel, euler_kernel
+        from tether.continuous.force_kernels import displacement_kernel, euler_kernel
 
         corners = np.zeros((0, q.shape[1])) if box is None else np.ascontiguousarray(box, float)
     while t < dt_s * (1 - 1e-12) and stats.substeps < params.max_substeps:
         lam = ev[0]
-        f_lambda = force(ev[1])
-        total = f_lambda + (external(q, v, f_lambda) if callable(external) else external)
-        if kernels:
+        if total_force is not None:
+            total, h_move = total_force(q, v, ev[1])
+            h = min(dt_s - t, h_move)
+        elif kernels:
+            f_lambda = force(ev[1])
+            total = f_lambda + (external(q, v, f_lambda) if callable(external) else external)
             h = min(dt_s - t, displacement_kernel(v, total, m, params.max_step_m))
         else:
+            f_lambda = force(ev[1])
+            total = f_lambda + (external(q, v, f_lambda) if callable(external) else external)
             h = min(dt_s - t, displacement_step(v, total, m, params.max_step_m))
         floor = lambda2_min + params.keep_fraction * (lam - lambda2_min)
         accepted = False

@@ -31,11 +31,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from tether import jit
 from tether.comm import MessageLayer
 
 # message fields (columns)
 EPOCH, HOST, BEST, BEST_IDX, RESULT, WINNER, ACK, ACK_CODE = range(8)
 TAKEN, DECLINED = 1.0, 2.0
+
+#: the merge's groups: the field compared, then the fields adopted with it (-1 pads)
+_GROUPS = np.array([[EPOCH, EPOCH, HOST, BEST, BEST_IDX], [RESULT, RESULT, WINNER, -1, -1],
+                    [ACK, ACK, ACK_CODE, -1, -1]], dtype=np.int64)  # fmt: skip
 
 # what each robot does with the token
 NO_TOKEN, IDLE, ACTIVE, HOSTING, TRANSIT = range(5)
@@ -133,9 +138,14 @@ class Election:
         # flood: every robot merges what its neighbours sent (last values received)
         inbox = self.layer.exchange(pairs, m)
         self.rounds += 1
-        ok = inbox.valid
-        recv, vals = inbox.receiver[ok], inbox.values[ok]
-        self._merge(recv, vals)
+        if jit.enabled():  # the same merge, compiled
+            from tether.continuous.round_kernels import merge_kernel
+
+            merge_kernel(m, inbox.receiver, inbox.values, inbox.valid, _GROUPS, EPOCH, BEST,
+                         BEST_IDX)  # fmt: skip
+        else:
+            ok = inbox.valid
+            self._merge(inbox.receiver[ok], inbox.values[ok])
         # hosts decide after 2(N - 1) rounds
         for h in np.flatnonzero((self.token == HOSTING) | (self.token == ACTIVE)):
             if self.opened_round[h] < 0 or self.rounds - self.opened_round[h] < self.wait_rounds:

@@ -62,7 +62,7 @@ class Messages:
 def edge_energy(graph: WeightedGraph, nu: np.ndarray) -> np.ndarray:
     """``T_i = sum_j W_ij (nu_i - nu_j)^2`` per robot (computable by robot ``i``)."""
     if jit.enabled():
-        from tether.continuous.kernels import edge_energy_kernel
+        from tether.continuous.force_kernels import edge_energy_kernel
 
         return edge_energy_kernel(graph.n, graph.pairs, graph.pair_factor, graph.collision,
                                   np.ascontiguousarray(nu, dtype=float))  # fmt: skip
@@ -86,7 +86,7 @@ def lambda2_gradient(graph: WeightedGraph, msg: Messages) -> np.ndarray:
     the exact gradient of lambda2 (where lambda2 is simple).
     """
     if jit.enabled() and graph.dP_di.ndim == 2:
-        from tether.continuous.kernels import gradient_kernel
+        from tether.continuous.force_kernels import gradient_kernel
 
         return gradient_kernel(
             graph.n, graph.pairs, graph.dP_di, graph.dP_dj, graph.coll_pairs, graph.coll_unit,
@@ -118,7 +118,7 @@ def connectivity_force(
     lam = np.broadcast_to(np.asarray(lambda2, dtype=float), (graph.n,))
     grad = lambda2_gradient(graph, msg)
     if jit.enabled():
-        from tether.continuous.kernels import force_kernel
+        from tether.continuous.force_kernels import force_kernel
 
         return force_kernel(grad, np.ascontiguousarray(lam), params.lambda2_min,
                             params.lambda2_null, params.potential_gain)  # fmt: skip

@@ -1,11 +1,9 @@
-"""Compiled kernels of App. A: pairs, weights, edge energies, gradient (numba, lazy).
+"""Compiled kernels of App. A: pairs, clearance, weights, Laplacian (numba, lazy).
 
-(Closest points on paths: :mod:`tether.continuous.tracking_kernels`.)
+(Closest points on paths: :mod:`tether.continuous.tracking_kernels`; forces and motion of
+a sub-step: :mod:`tether.continuous.force_kernels`.)
 
-The fast paths of :func:`tether.continuous.weights.compute_weights`,
-:func:`tether.continuous.gradient.edge_energy`,
-:func:`tether.continuous.gradient.lambda2_gradient` and
-:func:`tether.continuous.gradient.connectivity_force`, used when
+The fast paths of :func:`tether.continuous.weights.compute_weights`, used when
 :func:`tether.jit.enabled`. Each loop does the arithmetic of its numpy reference in the
 same order (``np.add.at`` and ``np.bincount`` accumulate in index order; the norm of a
 row is ``sqrt((x0^2 + x1^2) + x2^2)``; ``scipy.special.expit(x)`` is
@@ -315,73 +313,6 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
     return pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added
 
 
-@njit(cache=True)
-def edge_energy_kernel(n, pairs, pair_factor, collision, nu):  # noqa: ANN001, ANN201
-    """``T_i = sum_j W_ij (nu_i - nu_j)^2`` as :func:`~tether.continuous.gradient.edge_energy`."""
-    first = np.zeros(n)
-    second = np.zeros(n)
-    for k in range(len(pairs)):
-        i, j = pairs[k, 0], pairs[k, 1]
-        dn = nu[i] - nu[j]
-        e = pair_factor[k] * collision[i] * collision[j] * (dn * dn)
-        first[i] += e
-    for k in range(len(pairs)):
-        i, j = pairs[k, 0], pairs[k, 1]
-        dn = nu[i] - nu[j]
-        e = pair_factor[k] * collision[i] * collision[j] * (dn * dn)
-        second[j] += e
-    return first + second
-
-
-@njit(cache=True)
-def gradient_kernel(  # noqa: ANN201, PLR0913
-    n, pairs, dP_di, dP_dj, coll_pairs, coll_unit, coll_logd, nu, collision, energy
-):  # noqa: ANN001
-    """``dlambda2/dq`` as :func:`~tether.continuous.gradient.lambda2_gradient`, ``(n, dim)``."""
-    dim = dP_di.shape[1]
-    grad = np.zeros((n, dim))
-    m = len(pairs)
-    cc = np.empty(m)
-    for k in range(m):
-        i, j = pairs[k, 0], pairs[k, 1]
-        dn = nu[i] - nu[j]
-        cc[k] = collision[i] * collision[j] * (dn * dn)
-    for k in range(m):
-        for c in range(dim):
-            grad[pairs[k, 0], c] += dP_di[k, c] * cc[k]
-    for k in range(m):
-        for c in range(dim):
-            grad[pairs[k, 1], c] += dP_dj[k, c] * cc[k]
-    mc = len(coll_pairs)
-    for k in range(mc):
-        coef = coll_logd[k] * (energy[coll_pairs[k, 0]] + energy[coll_pairs[k, 1]])
-        for c in range(dim):
-            grad[coll_pairs[k, 0], c] += coef * coll_unit[k, c]
-    for k in range(mc):
-        coef = coll_logd[k] * (energy[coll_pairs[k, 0]] + energy[coll_pairs[k, 1]])
-        for c in range(dim):
-            grad[coll_pairs[k, 1], c] += -(coef * coll_unit[k, c])
-    return grad
-
-
-@njit(cache=True)
-def force_kernel(grad, lam, lo, hi, gain):  # noqa: ANN001, ANN201
-    """``-dV/dlambda2 * grad`` per robot (:func:`~tether.continuous.gradient.connectivity_force`).
-
-    ``lam`` is each robot's lambda2 ``(n,)``; the slope is
-    :func:`~tether.continuous.potential.potential_slope`.
-    """
-    n, dim = grad.shape
-    out = np.empty((n, dim))
-    for r in range(n):
-        a = max(hi - lam[r], 0.0)
-        b = max(lam[r] - lo, 1e-12)
-        slope = -gain * a * (a + 2.0 * b) / (b * b)
-        for c in range(dim):
-            out[r, c] = -slope * grad[r, c]
-    return out
-
-
 def warm_up() -> float:
     """Compile or load (from numba's cache) every kernel of the continuous strategies.
 
@@ -402,12 +333,16 @@ def warm_up() -> float:
     i, j = pairs[:, 0], pairs[:, 1]
     clear, s, o = index.segment_clearance_kernel(q[i], q[j], 1.75, i * 3 + j)
     index.segment_clearance_kernel(q[i], q[j], 1.75)
+    from tether.world.clearance_kernels import field_below_kernel
+
+    ones = np.ones(3, dtype=np.int64)
+    field_below_kernel(q, np.zeros(1), ones, ones, np.zeros(3), 1.0, 0.5, 1.0)
     out = weights_kernel(q, pairs, True, clear, s, o, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
     pf, dP_di, dP_dj, _, coll, cp, cu, cl = out
     nu = np.array([-0.5, 0.0, 0.5])
-    energy = edge_energy_kernel(3, pairs, pf, coll, nu)
-    grad = gradient_kernel(3, pairs, dP_di, dP_dj, cp, cu, cl, nu, coll, energy)
-    force_kernel(grad, np.full(3, 0.1), 0.0, 0.5, 1.0)
+    from tether.continuous.force_kernels import warm_up as force_warm_up
+
+    force_warm_up(q, pairs, out, nu)
     laplacian_dense_kernel(3, pairs, pf)
     first = np.array([0, 1], dtype=np.int64)
     seg = np.ones((1, 3))
@@ -419,12 +354,19 @@ def warm_up() -> float:
     for mask in (np.ones((4, 4), dtype=bool), np.ones((4, 4, 4), dtype=bool)):
         shape = np.asarray(mask.shape, dtype=np.int64)
         a = np.full((1, mask.ndim), 0.5)
-        segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5)
+        for field in (np.zeros(0), np.ones(mask.size)):
+            segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5, field, 1.0)
     for obs in (None, index):
         points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
+    from tether.continuous.round_kernels import warm_up as rounds_warm_up
+
+    rounds_warm_up()
+    from tether.comm_kernels import warm_up as comm_warm_up
+
+    comm_warm_up()
     from tether.recurrent.planning.steiner_kernels import warm_up as steiner_warm_up
 
     steiner_warm_up()
@@ -452,43 +394,3 @@ if __name__ == "__main__":  # the background warm-up of tether.jit's ``auto`` sw
     with contextlib.suppress(AttributeError, OSError):
         os.nice(10)
     warm_up()
-
-
-@njit(cache=True)
-def euler_kernel(q, v, force, h, mass, damping, box, margin):  # noqa: ANN001, ANN201
-    """:func:`~tether.continuous.dynamics.semi_implicit_euler`, then
-    :func:`~tether.continuous.dynamics.stay_inside` if ``box`` has two rows."""
-    n, dim = q.shape
-    q_new = np.empty((n, dim))
-    v_new = np.empty((n, dim))
-    for r in range(n):
-        for c in range(dim):
-            vn = (mass * v[r, c] + h * force[r, c]) / (mass + h * damping)
-            qn = q[r, c] + h * vn
-            if len(box) == 2:
-                lo = min(box[0, c] + margin, q[r, c])
-                hi = max(box[1, c] - margin, q[r, c])
-                clipped = min(max(qn, lo), hi)
-                if clipped != qn:
-                    vn = 0.0
-                qn = clipped
-            q_new[r, c] = qn
-            v_new[r, c] = vn
-    return q_new, v_new
-
-
-@njit(cache=True)
-def displacement_kernel(v, force, mass, delta):  # noqa: ANN001, ANN201
-    """:func:`~tether.continuous.dynamics.displacement_step` (``inf`` if nothing moves)."""
-    n, dim = v.shape
-    vmax, fmax = 0.0, 0.0
-    for r in range(n):
-        sv, sf = 0.0, 0.0
-        for c in range(dim):
-            sv += v[r, c] * v[r, c]
-            sf += force[r, c] * force[r, c]
-        vmax = max(vmax, math.sqrt(sv))
-        fmax = max(fmax, math.sqrt(sf))
-    disc = vmax * vmax + 4.0 * delta * fmax / mass
-    denom = vmax + math.sqrt(disc)
-    return np.inf if denom <= 0 else 2.0 * delta / denom

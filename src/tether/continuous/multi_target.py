@@ -34,6 +34,7 @@ from tether.continuous.recruit import HelpFlood, help_depth, help_force
 from tether.continuous.reference_filter import ReferenceFilter
 from tether.continuous.roles import ANCHOR, CONNECTOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
 from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.continuous.substep import fused_total_force
 from tether.continuous.targets import TargetBook
 from tether.continuous.travel import (
     alignment,
@@ -175,21 +176,42 @@ def _traveling_forces_kernel(
     anchors: tuple[np.ndarray, np.ndarray],
 ) -> np.ndarray:
     """:func:`traveling_forces` in one call of the compiled kernel (same bits)."""
-    from tether.continuous.tracking import TIE_M
     from tether.continuous.tracking_kernels import traveling_kernel
+
+    return traveling_kernel(np.ascontiguousarray(q), np.ascontiguousarray(v),
+                            np.ascontiguousarray(f_lambda),
+                            *travel_args(planner, lambda_hat, p, anchors),
+                            *travel_gains(p))  # fmt: skip
+
+
+def travel_args(
+    planner: RolePlanner,
+    lambda_hat: np.ndarray,
+    p: MultiTargetParams,
+    anchors: tuple[np.ndarray, np.ndarray],
+) -> tuple:
+    """The traveling kernel's arguments after ``f_lambda`` that a control period fixes.
+
+    The travelers, which of them are secondaries, ``Lambda_hat``, the anchored robots
+    and their targets, the paths' kernel arrays, ``v_cruise``, the tie width and
+    :func:`~tether.world.clearance.einsum_order`.
+    """
+    from tether.continuous.tracking import TIE_M
     from tether.world.clearance import einsum_order
 
     trav, paths = planner.path_set()
     trav = trav.astype(np.int64)
     held, targets = anchors[0].astype(np.int64), anchors[1]
     path = paths.kernel_args() if len(trav) else _NO_PATHS
-    return traveling_kernel(
-        np.ascontiguousarray(q), np.ascontiguousarray(v), np.ascontiguousarray(f_lambda), trav,
-        planner.role[trav] == SECONDARY, np.ascontiguousarray(lambda_hat, dtype=float), held,
-        np.ascontiguousarray(targets, dtype=float), path, float(p.v_cruise_mps), TIE_M,
-        einsum_order(), p.kp_n_per_m, p.kv_ns_per_m, p.mass_kg, p.damping_ns_per_m,
-        p.max_travel_force_n, p.sigma, p.rz_m, p.kz_n,
-    )  # fmt: skip
+    return (trav, planner.role[trav] == SECONDARY, np.ascontiguousarray(lambda_hat, dtype=float),
+            held, np.ascontiguousarray(targets, dtype=float), path, float(p.v_cruise_mps), TIE_M,
+            einsum_order())  # fmt: skip
+
+
+def travel_gains(p: MultiTargetParams) -> tuple[float, ...]:
+    """``(kp, kv, mass, damping, max_force, sigma, Rz, kz)`` as the traveling kernel takes them."""
+    return (p.kp_n_per_m, p.kv_ns_per_m, p.mass_kg, p.damping_ns_per_m, p.max_travel_force_n,
+            p.sigma, p.rz_m, p.kz_n)  # fmt: skip
 
 
 _i0, _f1, _f2 = np.zeros(1, np.int64), np.zeros(0), np.zeros((0, 3))
@@ -308,8 +330,15 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     # -- one control period ------------------------------------------------------------
     def _links(self) -> np.ndarray:
+        """The links of the weighted graph; the same array object while they do not change
+        (the message layer then reuses its link bookkeeping)."""
         graph = self._current[1][0]
-        return graph.pairs[graph.pair_factor > 0]
+        links = graph.pairs[graph.pair_factor > 0]
+        last = getattr(self, "_last_links", None)
+        if last is not None and np.array_equal(last, links):
+            return last
+        self._last_links = links
+        return links
 
     def _communicate(self, q: np.ndarray, v: np.ndarray, t_s: float, dt_s: float) -> None:
         p, pl = self.params, self.planner
@@ -379,20 +408,34 @@ class MultiTargetStrategy(ConnectivityStrategy):
         p, helpers = self.params, self._helpers
         parents_m = self.help.parent_m[helpers]
 
+        def helped(qq: np.ndarray, vv: np.ndarray, f: np.ndarray) -> np.ndarray:
+            """Recruited robots follow their parent instead (a secondary's ``f_i`` too)."""
+            f[helpers] = help_force(qq[helpers], vv[helpers], parents_m, keep_m=p.rs_inner_m,
+                                    kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
+                                    max_force_n=p.max_travel_force_n)  # fmt: skip
+            return f
+
         def external(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray) -> np.ndarray:
             f = traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate, p,
                                  anchors=self._held)  # fmt: skip
-            if len(helpers):  # recruited: follow the parent instead (a secondary's f_i too)
-                f[helpers] = help_force(qq[helpers], vv[helpers], parents_m, keep_m=p.rs_inner_m,
-                                        kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
-                                        max_force_n=p.max_travel_force_n)  # fmt: skip
-            return f
+            return helped(qq, vv, f) if len(helpers) else f
 
+        fused = None
+        if jit.enabled() and self.estimator is None:  # one compiled call per sub-step
+
+            def adjust(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray,
+                       f_ext: np.ndarray) -> np.ndarray:  # fmt: skip
+                return helped(qq, vv, f_ext)
+
+            fused = fused_total_force(self, travel_args(self.planner, self.consensus.estimate,
+                                                        self.params, self._held),
+                                      travel_gains(self.params),
+                                      adjust if len(helpers) else None)  # fmt: skip
         try:
             q_new, v_new, ev, stats = integrate(
                 q, v, ctx.dt_s, self._evaluate, self._force, external, self.integ,
                 self.conn.lambda2_min, self._current, box=self.world.bounds_m,
-                box_margin_m=self.conn.ro_m,
+                box_margin_m=self.conn.ro_m, total_force=fused,
             )  # fmt: skip
         finally:
             self._held = None

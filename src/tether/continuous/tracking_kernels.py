@@ -32,17 +32,26 @@ def _skip_to(q, r, pa, chord_start, chord_end, k, hi, limit):  # noqa: ANN001, A
 
     A point of segment ``j >= k`` is at most ``chord_end[j] - chord_start[k]`` (the
     polyline's length in between) from the sample ``pa[k]``, so it is farther than
-    ``limit`` from the robot while that is below ``|q_r - pa[k]| - limit``.
+    ``limit`` from the robot while that is below ``|q_r - pa[k]| - limit``. That test
+    is monotone in ``j`` (``chord_end`` never decreases), so the first ``j`` failing it
+    (or ``hi``) is found by bisection: the same ``j`` a scan finds.
     """
     dim = q.shape[1]
     sq = 0.0
     for c in range(dim):
         sq += (q[r, c] - pa[k, c]) ** 2
     reach = math.sqrt(sq) - limit - 1e-9
-    j = k
-    while j < hi and chord_end[j] - chord_start[k] < reach:
-        j += 1
-    return j
+    base = chord_start[k]
+    if not (k < hi and chord_end[k] - base < reach):
+        return k
+    lo, top = k, hi  # the test holds at lo; the answer is in (lo, top]
+    while top - lo > 1:
+        mid = (lo + top) // 2
+        if chord_end[mid] - base < reach:
+            lo = mid
+        else:
+            top = mid
+    return top
 
 
 @njit(cache=True)
@@ -59,7 +68,8 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
     that close are skipped (:func:`_skip_to`, from the cumulative chord lengths); the
     search starts from ``hint[r]`` (last call's segment, updated), which only speeds it
     up. Returns ``s_best``, ``point``, ``distance``, ``remaining``, ``velocity``,
-    ``acceleration``.
+    ``acceleration`` and the path's unit tangent and ``d2p/ds2`` at the closest points
+    (velocity and acceleration are ``v`` and ``v^2`` times them).
     """
     r_count, dim = q.shape
     s_best = np.empty(r_count)
@@ -68,6 +78,8 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
     remaining = np.empty(r_count)
     vel = np.empty((r_count, dim))
     acc = np.empty((r_count, dim))
+    tan = np.empty((r_count, dim))
+    kap = np.empty((r_count, dim))
     rel = np.empty(dim)
     off = np.empty(dim)
     for r in range(r_count):
@@ -105,9 +117,11 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
         v = speed[r] * (1.0 if (lengths[r] - s_max) > 1e-9 else 0.0)
         remaining[r] = max(lengths[r] - s_max, 0.0)
         for c in range(dim):
-            vel[r, c] = v * (ta[pick, c] + t_pick * dta[pick, c])
-            acc[r, c] = (v * v) * (ka[pick, c] + t_pick * dka[pick, c])
-    return s_best, point, dist_out, remaining, vel, acc
+            tan[r, c] = ta[pick, c] + t_pick * dta[pick, c]
+            kap[r, c] = ka[pick, c] + t_pick * dka[pick, c]
+            vel[r, c] = v * tan[r, c]
+            acc[r, c] = (v * v) * kap[r, c]
+    return s_best, point, dist_out, remaining, vel, acc, tan, kap
 
 
 @njit(cache=True)
@@ -132,7 +146,7 @@ def traveling_kernel(  # noqa: ANN201, PLR0913
         for r in range(r_count):
             qt[r] = q[trav[r]]
         speed = np.full(r_count, v_cruise)
-        _, point, _, _, vel, acc = path_states_kernel(
+        _, point, _, _, vel, acc, _, _ = path_states_kernel(
             qt, first, pa, dseg, inv_len2, sa, ds, ta, dta, ka, dka, lengths, speed, tie, order,
             cs, ce, hint,
         )  # fmt: skip

@@ -39,11 +39,13 @@ def sample_segments(
 
 
 @cache
+@cache
 def einsum_order() -> int:
     """1 if ``numpy.einsum("kd,kd->k")`` sums three terms as ``(x0 + x2) + x1``, else 0.
 
     numpy's summation order for short rows depends on its SIMD build (two-lane
-    vectors give this one); the kernels that reproduce an einsum follow it.
+    vectors give this one); the kernels that reproduce an einsum follow it. Computed
+    once per process (it is a property of the numpy build).
     """
     x = np.array([[1.0, 2.0**-53, -1.0]])
     return int(np.einsum("kd,kd->k", x, np.ones((1, 3)))[0] != 0.0)
@@ -123,17 +125,27 @@ class ObstacleIndex:
         ``inf`` when the distance field proves every point at least ``below_m`` (plus
         1e-9 m for rounding) away, so ``min(below_m, nearest_min(q, below_m))`` always
         equals ``min(below_m, tree.query(q)[0].min())``. Only the points the field does
-        not settle are searched. ``inf`` without obstacle points.
+        not settle are searched (and only out to ``below_m``). ``inf`` without obstacle
+        points.
         """
         if self.tree is None:
             return float("inf")
         points = np.asarray(points, dtype=float).reshape(-1, self.dim)
         if self.grid is not None and np.isfinite(below_m):
             margin = (1.0 if self._centred else 2.0) * self._half_diag_m
-            points = points[self._field_at(points) - margin < below_m + 1e-9]
+            if jit.enabled():  # the same test, compiled
+                from tether.world.clearance_kernels import field_below_kernel
+
+                flat, strides, shape, origin, res, _ = self._kernel_field
+                near = field_below_kernel(np.ascontiguousarray(points), flat, strides, shape,
+                                          origin, res, margin, float(below_m))  # fmt: skip
+            else:
+                near = self._field_at(points) - margin < below_m + 1e-9
+            points = points[near]
             if not len(points):
                 return float("inf")
-        return float(self.tree.query(points)[0].min())
+        # the bound only turns distances >= below_m into inf: min(below_m, .) is the same
+        return float(self.tree.query(points, distance_upper_bound=below_m)[0].min())
 
     def _lower_bound(
         self, a: np.ndarray, b: np.ndarray, within_m: float | None = None

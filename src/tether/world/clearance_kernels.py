@@ -170,6 +170,29 @@ def _field_clear(a, b, threshold, field, strides, shape, origin, res, margin):  
 
 
 @njit(cache=True)
+def field_below_kernel(points, field, strides, shape, origin, res, margin, below):  # noqa: ANN001, ANN201
+    """Per point: ``DF(c(x)) - margin < below + 1e-9`` (``DF`` 0 outside the grid).
+
+    The test of :meth:`tether.world.clearance.ObstacleIndex.nearest_min` (its
+    ``_field_at``), in the same arithmetic.
+    """
+    k_pts, dim = points.shape
+    out = np.empty(k_pts, np.bool_)
+    for k in range(k_pts):
+        flat = 0
+        inside = True
+        for d in range(dim):
+            c = int(math.floor((points[k, d] - origin[d]) / res))
+            if c < 0 or c >= shape[d]:
+                inside = False
+                break
+            flat += c * strides[d]
+        value = field[flat] if inside else 0.0
+        out[k] = value - margin < below + 1e-9
+    return out
+
+
+@njit(cache=True)
 def _search(spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, reach, seed,
             order, rel, stack, stack_g, stack_c):  # noqa: ANN001, ANN202  # fmt: skip
     """Least clearance of one segment below ``reach``: ``(d, s, point)``, point -1 if none.

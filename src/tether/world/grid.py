@@ -127,7 +127,12 @@ class OccupancyGrid:
         b = np.atleast_2d(np.asarray(b, dtype=float))
         mask = self.free_mask(clearance_m)
         to_cells = 1.0 / self.resolution_m
-        return segment_free(mask, (a - self.origin_m) * to_cells, (b - self.origin_m) * to_cells)
+        # the distance field of the free cells, if made already, lets the kernel skip samples
+        field = self.__dict__.get("distance_field_m") if not clearance_m > 0 else None
+        if field is not None and not field.flags.c_contiguous:
+            field = None
+        return segment_free(mask, (a - self.origin_m) * to_cells, (b - self.origin_m) * to_cells,
+                            field=field, field_to_cells=to_cells)  # fmt: skip
 
     def free_mask(self, clearance_m: float = 0.0) -> np.ndarray:
         """The mask :meth:`segments_clear` samples: free cells, or cells ``clearance_m`` clear.
