@@ -1,0 +1,86 @@
+"""Parameters of the ``multi_target`` strategy: Table 2 (``preset``) plus the open choices.
+
+What each choice means and why its default is what it is: ``docs/multi_target.md``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from tether.continuous.params import TRAVEL_TABLE2
+from tether.continuous.strategy import ConnectivityStrategyParams
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class TargetsConfig(_Strict):
+    """A target generator by name (``fixed``, ``paper_random``, ``schedule``) and its params."""
+
+    kind: str = "paper_random"
+    params: dict[str, Any] = Field(default_factory=dict)
+
+
+class MessagesConfig(_Strict):
+    """Faults of the message layer the election and the consensus talk through."""
+
+    rounds_per_step: int = Field(default=1, ge=1)
+    loss_probability: float = Field(default=0.0, ge=0, lt=1)
+    delay_rounds: int = Field(default=0, ge=0)
+
+
+class StartConfig(_Strict):
+    """Where the team starts when ``team.init`` is not ``positions``: a safe random team."""
+
+    center_m: list[float] | None = None
+    height_m: list[float] | None = None
+    margin_m: float = Field(default=2.0, ge=0)
+
+
+class MultiTargetParams(ConnectivityStrategyParams):
+    """Parameters of ``multi_target``: Table 2 (``preset``) plus the open choices."""
+
+    targets: TargetsConfig = Field(default_factory=TargetsConfig)
+    r_grid_m: float = Field(default=0.75, gt=0)
+    sigma: float = Field(default=3.0, ge=1)
+    v_cruise_mps: float = Field(default=3.0, gt=0)
+    xc_frac: float = Field(default=0.1, ge=0)
+    xm_frac: float = Field(default=0.6, gt=0)
+    rz_m: float = Field(default=1.8, gt=0)
+    kp_n_per_m: float = Field(default=4.0, gt=0)
+    kv_ns_per_m: float = Field(default=4.0, gt=0)
+    kz_n: float = Field(default=1.0, gt=0)
+    k_lambda_per_s: float = Field(default=5.0, gt=0)
+    alpha_lambda: float = Field(default=0.5, ge=0, le=1)
+    r_gamma_m: float | None = Field(default=None, gt=0, description="default: Rz")
+    inflate_m: float | None = Field(
+        default=None, gt=0, description="planning inflation; default (Ro + R'o) / 2"
+    )
+    stall_timeout_s: float | None = Field(default=60.0, gt=0)
+    help_after_s: float | None = Field(
+        default=20.0, gt=0, description="a stalled prime asks for help (None: never)"
+    )
+    help_max_hops: int = Field(default=2, ge=1)
+    max_travel_force_n: float = Field(default=10.0, gt=0)
+    election_criterion: Literal["path_length", "distance"] = "path_length"
+    messages: MessagesConfig = Field(default_factory=MessagesConfig)
+    start: StartConfig = Field(default_factory=StartConfig)
+    reference_filter: bool = False
+
+    @model_validator(mode="before")
+    @classmethod
+    def _apply_travel_preset(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            preset = data.get("preset", "outdoor")
+            if preset in TRAVEL_TABLE2:
+                data = {**TRAVEL_TABLE2[preset], **data}
+        return data
+
+    @model_validator(mode="after")
+    def _bands(self) -> MultiTargetParams:
+        if not self.xc_frac < self.xm_frac:
+            raise ValueError("need xc_frac < xm_frac (the efficiency band of eq. (9))")
+        return self
