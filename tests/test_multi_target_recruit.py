@@ -9,6 +9,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
+from tether import jit
 from tether.comm import CommParams, MessageLayer
 from tether.config import load_scenario
 from tether.continuous.recruit import HelpFlood, help_depth, help_force
@@ -142,3 +143,16 @@ def test_helpers_break_a_town_deadlock_that_holds_without_them() -> None:
     asked = [e for e in rec.events if e["kind"] == "help_requested"]
     assert asked and all(e["robot"] == 7 for e in asked)
     assert on["help_requests"] >= 1 and on["helper_robot_s"] > 0
+
+
+def test_helpers_move_the_same_with_the_compiled_sub_step_and_without() -> None:
+    """The fused sub-step (kernels on) must apply the helpers' force as the reference does."""
+    pytest.importorskip("numba")
+    runs = []
+    for on in (True, False):
+        with jit.using(on):
+            metrics, rec, _ = run_deadlock(300)  # the first request: steps 268-274
+        runs.append((metrics, np.array(rec.positions)))
+    (m_on, q_on), (m_off, q_off) = runs
+    assert m_on["helper_robot_s"] > 0 and m_on["help_requests"] == 1
+    np.testing.assert_array_equal(q_on, q_off)
