@@ -74,6 +74,20 @@ def directed(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
 
 
+def smallest_per_receiver(receiver: np.ndarray, *keys: np.ndarray) -> np.ndarray:
+    """Row index, per receiver that has rows, of its row with the smallest ``keys``.
+
+    Keys compare lexicographically, the first most significant; ties go to the
+    earlier row. Receivers come out in increasing order. A robot picking the best
+    message in its inbox (an election's candidate, a flood's nearest sender) uses it.
+    """
+    order = np.lexsort((*reversed(keys), receiver))
+    r = receiver[order]
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = r[1:] != r[:-1]
+    return order[first]
+
+
 class MessageLayer:
     """Synchronous rounds of neighbour-to-neighbour broadcasts with faults.
 

@@ -192,15 +192,12 @@ def integrate(
         lam = ev[0]
         if total_force is not None:
             total, h_move = total_force(q, v, ev[1])
-            h = min(dt_s - t, h_move)
-        elif kernels:
-            f_lambda = force(ev[1])
-            total = f_lambda + (external(q, v, f_lambda) if callable(external) else external)
-            h = min(dt_s - t, displacement_kernel(v, total, m, params.max_step_m))
         else:
             f_lambda = force(ev[1])
             total = f_lambda + (external(q, v, f_lambda) if callable(external) else external)
-            h = min(dt_s - t, displacement_step(v, total, m, params.max_step_m))
+            step = displacement_kernel if kernels else displacement_step
+            h_move = step(v, total, m, params.max_step_m)
+        h = min(dt_s - t, h_move)
         floor = lambda2_min + params.keep_fraction * (lam - lambda2_min)
         accepted = False
         for _ in range(params.max_halvings + 1):

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tether import jit
-from tether.comm import MessageLayer
+from tether.comm import MessageLayer, smallest_per_receiver
 
 # message fields (columns)
 EPOCH, HOST, BEST, BEST_IDX, RESULT, WINNER, ACK, ACK_CODE = range(8)
@@ -189,10 +189,8 @@ class Election:
         if not same.any():
             return
         r, b, bi = recv[same], vals[same, BEST], vals[same, BEST_IDX]
-        order = np.lexsort((bi, b, r))
-        r, b, bi = r[order], b[order], bi[order]
-        first = np.r_[True, r[1:] != r[:-1]]
-        r, b, bi = r[first], b[first], bi[first]
+        best = smallest_per_receiver(r, b, bi)
+        r, b, bi = r[best], b[best], bi[best]
         better = (b < m[r, BEST]) | ((b == m[r, BEST]) & (bi < m[r, BEST_IDX]))
         m[r[better], BEST] = b[better]
         m[r[better], BEST_IDX] = bi[better]

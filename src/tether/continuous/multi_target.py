@@ -237,6 +237,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._filter_dev = 0.0
         self._prime_eff = 1.0
         self._held: tuple[np.ndarray, np.ndarray] | None = None
+        self._last_links: np.ndarray | None = None
         self._current = self._evaluate(state.positions)
 
     def _anchors(self) -> tuple[np.ndarray, np.ndarray]:
@@ -260,9 +261,8 @@ class MultiTargetStrategy(ConnectivityStrategy):
         (the message layer then reuses its link bookkeeping)."""
         graph = self._current[1][0]
         links = graph.pairs[graph.pair_factor > 0]
-        last = getattr(self, "_last_links", None)
-        if last is not None and np.array_equal(last, links):
-            return last
+        if self._last_links is not None and np.array_equal(self._last_links, links):
+            return self._last_links
         self._last_links = links
         return links
 
@@ -318,7 +318,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
                 self._help_requests += self._help_depth == 0
                 self.emit("help_requested", prime, t_s=t_s, hops=depth)
             elif depth == 0:
-                self.emit("help_ended", max(prime, -1), t_s=t_s)
+                self.emit("help_ended", prime, t_s=t_s)
             self._help_depth = depth
         for _ in range(p.messages.rounds_per_step):
             self.help.round(links, q, prime, depth)

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tether.comm import MessageLayer
+from tether.comm import MessageLayer, smallest_per_receiver
 from tether.continuous.travel import saturate
 
 NO_HELP = np.inf
@@ -81,10 +81,7 @@ class HelpFlood:
         n = len(self.hop)
         hop, depth, parent = np.full(n, NO_HELP), np.zeros(n), np.full(n, -1)
         parent_m = np.full_like(self.parent_m, np.nan)
-        order = np.lexsort((send, vals[:, 0], recv))  # per receiver: smallest hop, lower index
-        first = np.ones(len(order), dtype=bool)
-        first[1:] = recv[order][1:] != recv[order][:-1]
-        best = order[first]
+        best = smallest_per_receiver(recv, vals[:, 0], send)  # smallest hop, lower index
         r = recv[best]
         hop[r], depth[r], parent[r] = vals[best, 0] + 1, vals[best, 1], send[best]
         parent_m[r] = vals[best, 2:]

@@ -72,6 +72,40 @@ def _augment(tail, head, out_ptr, out_arcs, in_ptr, in_arcs, cap, flow, t, via, 
 
 
 @njit(cache=True)
+def _residual_reach(
+    start, fwd_ptr, fwd_arcs, fwd_end, rev_ptr, rev_arcs, rev_end, cap, flow, queue
+):  # noqa: ANN001, ANN202, PLR0913
+    """Vertices reached from ``start`` in the residual graph, by breadth-first search.
+
+    From ``u`` it follows the arcs ``fwd_arcs[fwd_ptr[u]:fwd_ptr[u + 1]]`` that have
+    capacity left, to ``fwd_end[a]``, and the arcs ``rev_arcs[...]`` that carry flow, to
+    ``rev_end[a]``. Out-arcs to heads with in-arcs to tails is the source side's
+    search; in-arcs to tails with out-arcs to heads searches backwards from the sink.
+    """
+    n = len(fwd_ptr) - 1
+    seen = np.zeros(n, np.bool_)
+    seen[start] = True
+    queue[0] = start
+    lo, hi = 0, 1
+    while lo < hi:
+        u = queue[lo]
+        lo += 1
+        for k in range(fwd_ptr[u], fwd_ptr[u + 1]):
+            a = fwd_arcs[k]
+            if not seen[fwd_end[a]] and cap[a] > flow[a]:
+                seen[fwd_end[a]] = True
+                queue[hi] = fwd_end[a]
+                hi += 1
+        for k in range(rev_ptr[u], rev_ptr[u + 1]):
+            a = rev_arcs[k]
+            if not seen[rev_end[a]] and flow[a] > 0:
+                seen[rev_end[a]] = True
+                queue[hi] = rev_end[a]
+                hi += 1
+    return seen
+
+
+@njit(cache=True)
 def min_cut_kernel(tail, head, out_ptr, out_arcs, in_ptr, in_arcs, cap, t, enough, scale):  # noqa: ANN001, ANN201, PLR0913
     """Maximum flow ``0 -> t`` under integer capacities ``cap`` (arcs ``tail -> head``).
 
@@ -95,47 +129,11 @@ def min_cut_kernel(tail, head, out_ptr, out_arcs, in_ptr, in_arcs, cap, t, enoug
         total += amount
         if total / scale >= enough:
             return total / scale, inside, back
-    # source side: reachable from 0 (forward residual arcs)
-    seen = np.zeros(n, np.bool_)
-    seen[0] = True
-    queue[0] = 0
-    lo, hi = 0, 1
-    while lo < hi:
-        u = queue[lo]
-        lo += 1
-        for k in range(out_ptr[u], out_ptr[u + 1]):
-            a = out_arcs[k]
-            if not seen[head[a]] and cap[a] > flow[a]:
-                seen[head[a]] = True
-                queue[hi] = head[a]
-                hi += 1
-        for k in range(in_ptr[u], in_ptr[u + 1]):
-            a = in_arcs[k]
-            if not seen[tail[a]] and flow[a] > 0:
-                seen[tail[a]] = True
-                queue[hi] = tail[a]
-                hi += 1
-    for v in range(n):
-        inside[v] = not seen[v]
-    # sink side: reaches t (residual arcs followed backwards)
-    back[t] = True
-    queue[0] = t
-    lo, hi = 0, 1
-    while lo < hi:
-        v = queue[lo]
-        lo += 1
-        for k in range(in_ptr[v], in_ptr[v + 1]):  # u -> v forward: cap left on (u, v)
-            a = in_arcs[k]
-            if not back[tail[a]] and cap[a] > flow[a]:
-                back[tail[a]] = True
-                queue[hi] = tail[a]
-                hi += 1
-        for k in range(out_ptr[v], out_ptr[v + 1]):  # w -> v backward: flow on (v, w)
-            a = out_arcs[k]
-            if not back[head[a]] and flow[a] > 0:
-                back[head[a]] = True
-                queue[hi] = head[a]
-                hi += 1
+    # source side: reachable from 0 along residual arcs
+    inside = ~_residual_reach(0, out_ptr, out_arcs, head, in_ptr, in_arcs, tail, cap, flow, queue)
+    # sink side: reaches t along residual arcs (followed backwards: u -> v forward has
+    # capacity left on (u, v), w -> v backward has flow on (v, w))
+    back = _residual_reach(t, in_ptr, in_arcs, tail, out_ptr, out_arcs, head, cap, flow, queue)
     return total / scale, inside, back
 
 
