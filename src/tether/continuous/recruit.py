@@ -95,11 +95,50 @@ class HelpFlood:
         return np.flatnonzero((self.hop >= 1) & np.isfinite(self.hop) & may_help)
 
 
-def help_depth(stalled_s: float, help_after_s: float, max_hops: int) -> int:
-    """Hops the request reaches after ``stalled_s`` without progress (0: no request)."""
+def help_depth(stalled_s: float, help_after_s: float, max_hops: int, base: int = 0) -> int:
+    """Hops the request reaches after ``stalled_s`` without progress (0: no request).
+
+    ``base`` is the depth the same prime's last request reached, when it ended less
+    than ``help_memory_s`` ago: a prime that crawls in bursts (each burst of progress
+    ends its request) asks again one hop deeper than before, instead of from 1.
+    """
     if not np.isfinite(stalled_s) or stalled_s < help_after_s:
         return 0
-    return int(min(max_hops, 1 + (stalled_s - help_after_s) // help_after_s))
+    return int(min(max_hops, base + 1 + (stalled_s - help_after_s) // help_after_s))
+
+
+class RequestDepth:
+    """How deep the prime's help request reaches, step by step (the prime's own state).
+
+    ``update`` gives the depth (:func:`help_depth`) and what changed: ``"requested"``
+    when the request starts or deepens, ``"ended"`` when it stops. A prime whose
+    request ended because it progressed remembers that depth for ``memory_s``: if it
+    stalls again within that time, its next request starts one hop deeper (a prime
+    crawling in bursts would otherwise ask its 1-hop neighbours again and again).
+    A new prime starts from nothing.
+    """
+
+    def __init__(self, after_s: float | None, max_hops: int, memory_s: float = 0.0) -> None:
+        self.after_s, self.max_hops, self.memory_s = after_s, max_hops, memory_s
+        self.depth = 0
+        self._prime, self._base, self._ended_s = -1, 0, -np.inf
+
+    def update(self, prime: int, stalled_s: float, t_s: float) -> tuple[int, str | None]:
+        same = prime == self._prime
+        if not same or (self.depth == 0 and t_s - self._ended_s > self.memory_s):
+            self._prime, self._base = prime, 0  # a new prime, or the memory has expired
+        depth = 0
+        if prime >= 0 and self.after_s is not None:
+            depth = help_depth(stalled_s, self.after_s, self.max_hops, self._base)
+        change = None
+        if depth > self.depth:
+            change = "requested"
+        elif depth == 0 and self.depth > 0:
+            change = "ended"
+            if same:  # the prime progressed: remember how deep it had to ask
+                self._base, self._ended_s = self.depth, t_s
+        self.depth = depth
+        return depth, change
 
 
 def help_force(
