@@ -36,37 +36,33 @@ def test_the_request_deepens_with_the_stall_and_is_capped() -> None:
 
 
 def _crawl(depth: RequestDepth, bursts: list[tuple[float, float]], prime: int = 3) -> list[int]:
-    """Feed ``(stall, pause)`` bursts at 10 Hz: stalled for ``stall`` s, then progress."""
-    t, seen = 0.0, []
-    for stall_s, pause_s in bursts:
-        for k in range(int(round(stall_s * 10))):
-            seen.append(depth.update(prime, k / 10, t)[0])
-            t += 0.1
-        for _ in range(int(round(pause_s * 10))):
-            seen.append(depth.update(prime, 0.0, t)[0])
-            t += 0.1
+    """Feed ``(stall, moving)`` bursts at 10 Hz: stalled for ``stall`` s, then progressing."""
+    seen = []
+    for stall_s, moving_s in bursts:
+        seen += [depth.update(prime, k / 10)[0] for k in range(int(round(stall_s * 10)))]
+        seen += [depth.update(prime, 0.0)[0] for _ in range(int(round(moving_s * 10)))]
     return seen
 
 
-def test_a_prime_crawling_in_bursts_asks_deeper_each_time_with_memory() -> None:
-    bursts = [(35.0, 2.0)] * 5  # stalls of 35 s (depth 1 after 20 s), short bursts between
-    plain = _crawl(RequestDepth(20.0, 8, memory_s=0.0), bursts)
-    kept = _crawl(RequestDepth(20.0, 8, memory_s=60.0), bursts)
-    assert max(plain) == 1  # without memory every request starts again at 1 hop
+def test_a_prime_crawling_in_bursts_keeps_and_deepens_its_request_until_its_turn_ends() -> None:
+    bursts = [(35.0, 2.0)] * 5  # stalls of 35 s (1 hop after 20 s), short progress between
+    plain = _crawl(RequestDepth(20.0, 8, until="progress"), bursts)
+    sticky = RequestDepth(20.0, 8, until="arrival")
+    kept = _crawl(sticky, bursts)
+    assert max(plain) == 1 and plain[-1] == 0  # every request starts again at 1 hop and ends
     assert max(kept) == 5  # one hop deeper per stall: 1, 2, 3, 4, 5
-    capped = _crawl(RequestDepth(20.0, 3, memory_s=60.0), bursts)
-    assert max(capped) == 3
-    # a pause longer than the memory forgets: the next request starts at 1 again
-    forgetful = _crawl(RequestDepth(20.0, 8, memory_s=60.0), [(35.0, 61.0)] * 3)
-    assert max(forgetful) == 1
+    assert min(kept[200:]) >= 1  # never dropped once asked, progress or not
+    assert np.all(np.diff(kept) >= 0)
+    assert max(_crawl(RequestDepth(20.0, 3, until="arrival"), bursts)) == 3  # the cap
+    assert sticky.update(7, 0.0) == (0, "ended")  # another prime: the old request ends
 
 
 def test_a_new_prime_starts_its_request_from_one_hop() -> None:
-    depth = RequestDepth(20.0, 8, memory_s=600.0)
-    _crawl(depth, [(45.0, 1.0)] * 3, prime=3)  # prime 3 reached depth 4
+    depth = RequestDepth(20.0, 8, until="arrival")
+    _crawl(depth, [(45.0, 1.0)] * 3, prime=3)  # prime 3 reached 6 hops
     assert max(_crawl(depth, [(25.0, 1.0)], prime=5)) == 1
-    assert depth.update(-1, 0.0, 1e3) == (0, None)  # no prime: no request, nothing to end
-    assert RequestDepth(None, 8).update(2, 1e3, 0.0) == (0, None)  # help switched off
+    assert depth.update(-1, 0.0) == (0, "ended")  # no prime: no request
+    assert RequestDepth(None, 8).update(2, 1e3) == (0, None)  # help switched off
 
 
 @pytest.mark.parametrize("seed", range(8))

@@ -217,7 +217,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self.consensus = EfficiencyConsensus(n, MessageLayer(n, comm, rng), p.k_lambda_per_s)
         self.help = HelpFlood(n, state.dim, MessageLayer(n, comm, rng))
         self._helpers = np.zeros(0, dtype=int)
-        self._depth = RequestDepth(p.help_after_s, p.help_max_hops, p.help_memory_s)
+        self._depth = RequestDepth(p.help_after_s, p.help_max_hops, p.help_until)
         self._help_requests = 0
         self._helper_s = 0.0
         self.planner = RolePlanner(
@@ -312,7 +312,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         p, pl = self.params, self.planner
         stalled_s = pl.stalled_s(prime, t_s) if prime >= 0 else 0.0
         fresh = self._depth.depth == 0
-        depth, change = self._depth.update(prime, stalled_s, t_s)
+        depth, change = self._depth.update(prime, stalled_s)
         if change == "requested":
             self._help_requests += fresh
             self.emit("help_requested", prime, t_s=t_s, hops=depth)

@@ -64,11 +64,10 @@ class MultiTargetParams(ConnectivityStrategyParams):
         default=20.0, gt=0, description="a stalled prime asks for help (None: never)"
     )
     help_max_hops: int = Field(default=2, ge=1)
-    help_memory_s: float = Field(
-        default=0.0,
-        ge=0,
-        description="a prime's next request starts one hop deeper than its "
-        "last if that ended less than this ago (0: always from 1 hop)",
+    help_until: Literal["progress", "arrival"] = Field(
+        default="progress",
+        description="what ends a help request: the prime's next "
+        "progress, or the end of its turn (arrival, drop, a new prime)",
     )
     max_travel_force_n: float = Field(default=10.0, gt=0)
     election_criterion: Literal["path_length", "distance"] = "path_length"
