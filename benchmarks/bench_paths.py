@@ -122,6 +122,7 @@ def bench_town(n_pairs: int) -> dict:
     ends = free_positions(world, 2 * n_pairs, rng, clearance_m=1.0)
     t_plan, t_smooth, t_closest, t_virtual, kinds, lengths = [], [], [], [], [], []
     cpu_plan: list[float] = []
+    cpu_smooth: list[float] = []
     for a, b in ends.reshape(n_pairs, 2, 3):
         wp, dt = timed(plan_path, world, a, b, cell_m=cell, planning=plan)
         if wp is None:
@@ -130,6 +131,7 @@ def bench_town(n_pairs: int) -> dict:
         cpu_plan.append(CPU_S[-1])
         path, dt = timed(smooth_path, wp, world, planning=plan)
         t_smooth.append(dt)
+        cpu_smooth.append(CPU_S[-1])
         kinds.append(path.kind)
         lengths.append(path.length_m)
         q = path.point(0.4 * path.length_m) + 0.5
@@ -143,7 +145,7 @@ def bench_town(n_pairs: int) -> dict:
         "planning_grid_first_ms": 1e3 * first,
         "planning_grid_cached_df_ms": 1e3 * again,
         "plan_path": summary_ms(t_plan, cpu_plan),
-        "smooth_path": summary_ms(t_smooth),
+        "smooth_path": summary_ms(t_smooth, cpu_smooth),
         "closest_point": summary_ms(t_closest),
         "virtual_state": summary_ms(t_virtual),
         "smoothed_kinds": {k: kinds.count(k) for k in sorted(set(kinds))},
