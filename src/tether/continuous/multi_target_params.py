@@ -63,9 +63,9 @@ class MultiTargetParams(ConnectivityStrategyParams):
     help_after_s: float | None = Field(
         default=20.0, gt=0, description="a stalled prime asks for help (None: never)"
     )
-    help_max_hops: int = Field(default=2, ge=1)
+    help_max_hops: int = Field(default=8, ge=1)
     help_until: Literal["progress", "arrival"] = Field(
-        default="progress",
+        default="arrival",
         description="what ends a help request: the prime's next "
         "progress, or the end of its turn (arrival, drop, a new prime)",
     )
