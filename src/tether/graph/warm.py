@@ -33,7 +33,7 @@ class WarmState:
     when the spectral gap is small. ``rel`` is ``3 drift / theta0``, room for about
     three more steps like the one that invalidated the last factorization, when that
     stays below ``SHIFT_MAX`` and half the smallest ``rel`` seen to reach past lambda3
-    (``gap_rel``, relaxed by a quarter at each factorization since the spectrum
+    (``gap_rel``, relaxed by 5 % at each factorization since the spectrum
     moves); otherwise, when a step changes the graph by more than the gap (reuse is
     hopeless), the solver's own small shift, which converges fastest.
     Results depend on the state only within the certified tolerances.
@@ -42,7 +42,7 @@ class WarmState:
     between runs, so a run's results do not depend on what ran before it.
     """
 
-    SHIFT_MAX = 0.5
+    SHIFT_MAX = 2.0
 
     def __init__(self, shift_rel: float = 0.1) -> None:
         self.shift_rel = shift_rel
@@ -167,7 +167,7 @@ def _factor(
     A shift that reaches past lambda3 is recorded in ``state.gap_rel``.
     """
     if state is not None:
-        state.gap_rel *= 1.25
+        state.gap_rel *= 1.05
     for _ in range(retries + 1):
         tau = theta0 * (1.0 + rel)
         try:
