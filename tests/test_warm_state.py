@@ -80,6 +80,28 @@ def test_links_product_and_shifted_matrix(seed: int) -> None:
         assert np.array_equal(getattr(s_got, a), getattr(s_ref, a))
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_links_of_sorted_pairs_kernel_equals_reference(seed: int) -> None:
+    """The compiled fast path for sorted unique pairs (a strategy's) and numpy's."""
+    q, pairs = geometric(seed, 80)
+    w = _weights(q, pairs, 2.2)
+    w[::7] = 0.0  # links of zero weight are dropped
+    pairs = np.concatenate([pairs, [[5, 5]]])  # a self-loop too, at the end
+    w = np.append(w, 1.0)
+    with jit.using(False):
+        ref = Links.from_pairs(80, pairs, w)
+        ref_deg = ref.degrees
+    with jit.using(True):
+        got = Links.from_pairs(80, pairs, w)
+    for a in ("lo", "hi", "w", "keys"):
+        assert np.array_equal(getattr(got, a), getattr(ref, a))
+    assert np.array_equal(got.degrees, ref_deg)
+    assert np.array_equal(ref_deg, laplacian_dense(80, pairs[:-1], w[:-1]).diagonal()) or (
+        np.allclose(ref_deg, laplacian_dense(80, pairs[:-1], w[:-1]).diagonal(), rtol=1e-14)
+    )
+    assert len(got.w) == int(np.count_nonzero(w[:-1] > 0))
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_change_bound_bounds_the_true_norm(seed: int) -> None:
     """``||L_b - L_a||_2 <= change_bound`` on graphs that gain and lose links."""
@@ -156,7 +178,9 @@ def test_kept_factorization_agrees_with_networkx() -> None:
     w = _weights(q, pairs, 2.2)
     g = nx.Graph()
     g.add_nodes_from(range(130))
-    g.add_weighted_edges_from((int(a), int(b), float(c)) for (a, b), c in zip(pairs, w, strict=True))
+    g.add_weighted_edges_from(
+        (int(a), int(b), float(c)) for (a, b), c in zip(pairs, w, strict=True)
+    )
     if not nx.is_connected(g):
         pytest.skip("this draw is disconnected")
     want = nx.algebraic_connectivity(g, weight="weight", method="tracemin_lu", tol=1e-12)

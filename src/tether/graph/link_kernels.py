@@ -14,6 +14,47 @@ from numba import njit
 
 
 @njit(cache=True)
+def canonical_kernel(n, pairs, w):  # noqa: ANN001, ANN201
+    """Links of weight ``> 0`` of pairs already sorted with ``i < j`` and unique, and degrees.
+
+    Returns ``ok, lo, hi, w, keys, deg``; ``ok`` is False (and the rest empty) when the
+    pairs are not in that form: the caller sorts them then.
+    """
+    m = len(w)
+    keep = 0
+    last = -1
+    for k in range(m):
+        a, b = pairs[k, 0], pairs[k, 1]
+        if not a < b:
+            if a == b:
+                continue
+            return False, pairs[:0, 0].copy(), pairs[:0, 0].copy(), w[:0].copy(), \
+                pairs[:0, 0].copy(), np.zeros(0)  # fmt: skip
+        key = a * n + b
+        if key <= last:
+            return False, pairs[:0, 0].copy(), pairs[:0, 0].copy(), w[:0].copy(), \
+                pairs[:0, 0].copy(), np.zeros(0)  # fmt: skip
+        last = key
+        if w[k] > 0:
+            keep += 1
+    lo = np.empty(keep, np.int64)
+    hi = np.empty(keep, np.int64)
+    wk = np.empty(keep)
+    keys = np.empty(keep, np.int64)
+    deg_lo = np.zeros(n)
+    deg_hi = np.zeros(n)
+    e = 0
+    for k in range(m):
+        a, b = pairs[k, 0], pairs[k, 1]
+        if a < b and w[k] > 0:
+            lo[e], hi[e], wk[e], keys[e] = a, b, w[k], a * n + b
+            deg_lo[a] += w[k]
+            deg_hi[b] += w[k]
+            e += 1
+    return True, lo, hi, wk, keys, deg_lo + deg_hi
+
+
+@njit(cache=True)
 def product_kernel(n, lo, hi, w, x):  # noqa: ANN001, ANN201
     """``L x`` for ``L = sum_k w_k (e_lo - e_hi)(e_lo - e_hi)'``."""
     a = np.zeros(n)
@@ -97,6 +138,7 @@ def warm_up() -> None:
     hi = np.array([1, 2], np.int64)
     w = np.array([1.0, 0.5])
     keys = lo * 3 + hi
+    canonical_kernel(3, np.column_stack((lo, hi)), w)
     product_kernel(3, lo, hi, w, np.ones(3))
     change_kernel(3, keys, lo, hi, w, keys, lo, hi, w)
     shifted_csc_kernel(3, lo, hi, w, 0.1)

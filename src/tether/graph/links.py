@@ -40,6 +40,14 @@ class Links:
         """The canonical links of ``(m, 2)`` ``pairs`` with optional ``(m,)`` weights."""
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         w = np.ones(len(pairs)) if weights is None else np.asarray(weights, dtype=float)
+        if jit.enabled():
+            from tether.graph.link_kernels import canonical_kernel
+
+            ok, lo, hi, wk, keys, deg = canonical_kernel(n, np.ascontiguousarray(pairs), w)
+            if ok:
+                links = cls(n, lo, hi, wk, keys)
+                links.__dict__["degrees"] = deg  # the cached property, computed alike
+                return links
         lo = np.minimum(pairs[:, 0], pairs[:, 1])
         hi = np.maximum(pairs[:, 0], pairs[:, 1])
         keep = (lo != hi) & (w > 0)
@@ -52,6 +60,11 @@ class Links:
             w = np.add.reduceat(w[order], first)
             lo, hi = keys // n, keys % n
         return cls(n, lo, hi, w, keys)
+
+    @cached_property
+    def degrees(self) -> np.ndarray:
+        """``(n,)`` weighted degrees."""
+        return np.bincount(self.lo, self.w, self.n) + np.bincount(self.hi, self.w, self.n)
 
     def product(self, x: np.ndarray) -> np.ndarray:
         """``L x`` (``(n,)``)."""
@@ -71,7 +84,7 @@ class Links:
 
             indptr, indices, data = shifted_csc_kernel(n, self.lo, self.hi, self.w, float(tau))
         else:
-            deg = np.bincount(self.lo, self.w, n) + np.bincount(self.hi, self.w, n)
+            deg = self.degrees
             nodes = np.arange(n, dtype=np.int64)
             cols = np.concatenate([self.hi, self.lo, nodes])
             rows = np.concatenate([self.lo, self.hi, nodes])
@@ -82,13 +95,10 @@ class Links:
             np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
         return sp.csc_matrix((data, indices, indptr), shape=(n, n))
 
-    @cached_property
+    @property
     def max_degree(self) -> float:
         """The largest weighted degree (``||L||_2 <= 2`` times it)."""
-        if len(self.w) == 0:
-            return 0.0
-        deg = np.bincount(self.lo, self.w, self.n) + np.bincount(self.hi, self.w, self.n)
-        return float(deg.max())
+        return float(self.degrees.max()) if self.n else 0.0
 
 
 def change_bound(a: Links, b: Links) -> float:
