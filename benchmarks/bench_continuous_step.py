@@ -4,9 +4,12 @@ For N = 10, 35, 100, 1000 robots (and 10,000 in free space, on a jittered
 3 m lattice, since the random-tree placement is quadratic in N), in free 3-D
 space and in the town scene, with the exact eigensolver (full ``eigh`` up to
 16 robots, the second eigenpair only up to 400, above the certified
-warm-started inverse iteration from the previous Fiedler vector, falling back
-to sparse shift-invert Lanczos; ``eigen_cold_s`` times the solver without a
-warm start) and with the
+warm-started iteration from the previous Fiedler vector, keeping its sparse
+factorization between steps in a :class:`tether.graph.WarmState` as a run does,
+falling back to sparse shift-invert Lanczos; ``eigen_cold_s`` times the solver
+without a warm start, ``eigen_fresh_s`` with a warm start but a new
+factorization each call, as when the graph changed more than its spectral gap
+since the last one; ``factorizations`` counts the step's) and with the
 decentralized estimator (``rounds`` communication rounds per step; on perfect
 links computed as Laplacian products, with 10 % loss through the message
 layer's mailboxes, ``estimator_loss10``, up to 100 robots). A "step" is one
@@ -92,6 +95,9 @@ def bench(world: World, n: int, solver: str, rounds: int, repeat: int, loss: flo
         compute_weights(q, c, obs)
 
     states = {"eigen": WarmState(), "step": WarmState()}  # as a run keeps one
+    primer = WarmState()  # first calls untimed: the factoring path, then the reusing one
+    for _ in range(2):  # (its first call loads numba's cached kernels, ~10 ms once)
+        graph.fiedler(guess=nu, state=primer)
 
     def eigen() -> None:
         graph.fiedler(guess=nu, state=states["eigen"])
