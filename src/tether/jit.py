@@ -46,6 +46,7 @@ KERNEL_MODULES = (
     "paths/astar_kernels.py",
     "graph/kernels.py",
     "graph/grid_kernels.py",
+    "graph/link_kernels.py",
     "recurrent/planning/steiner_kernels.py",
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",

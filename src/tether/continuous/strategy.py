@@ -37,6 +37,7 @@ from tether.continuous.gradient import connectivity_force, messages
 from tether.continuous.params import TABLE2, ConnectivityParams
 from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
+from tether.graph.warm import WarmState
 from tether.registry import STRATEGIES
 from tether.sim import StepContext, Strategy, TeamState
 from tether.world.clearance import ObstacleIndex
@@ -270,6 +271,7 @@ class ConnectivityStrategy(Strategy):
         self.obstacles = ObstacleIndex.shared(world)
         self.n = state.n
         self._nu: np.ndarray | None = None
+        self._warm = WarmState()  # the large-team eigensolver's factorization, this run only
         self._held: np.ndarray | None = None
         self._held_until = -1.0
         self._current = None
@@ -295,7 +297,7 @@ class ConnectivityStrategy(Strategy):
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
         graph = compute_weights(q, self.conn, self.obstacles)
         if self.params.eigensolver == "exact" or self.params.safeguard:
-            lam, nu = graph.fiedler(guess=self._nu)
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
         else:
             lam, nu = np.inf, None
         return lam, (graph, lam, nu)
@@ -345,7 +347,7 @@ class ConnectivityStrategy(Strategy):
     def _observe(self, q: np.ndarray, graph: Any, lam: float, nu: np.ndarray | None) -> None:
         """Track the invariants (exact lambda2, distances, clearances) for ``metrics``."""
         if nu is None and self.n <= 500:
-            lam, nu = graph.fiedler(guess=self._nu)
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
         if np.isfinite(lam):
             self._min["lambda2"] = min(self._min["lambda2"], float(lam))
         if len(graph.pairs):
