@@ -166,8 +166,8 @@ class UtilityStrategy:
         nodes_arr = np.asarray(nodes)
         pos = coarse.centre(nodes_arr)
         gain = window_counts(~known, pos, int(round(sim.cfg.sensor_range_cells)))
-        dist, pred = coarse.distances(src, predecessors=True)
-        d = dist[:, nodes_arr]
+        geo = coarse.geodesics(src)
+        d = geo.dist[:, nodes_arr]
         util = gain[None, :] / np.maximum(d, 1.0) ** 2  # eq. (1) per robot
         util[~np.isfinite(d)] = -1.0
         if self.coordination == "none":  # each robot on its own: its best frontier
@@ -176,7 +176,7 @@ class UtilityStrategy:
                 if util[k, f] < 0:
                     self._exhaust(sim, r)
                     continue
-                path = np.vstack([sim.pos[r : r + 1], coarse.path(pred[k], int(nodes_arr[f]))])
+                path = np.vstack([sim.pos[r : r + 1], geo.path(k, int(nodes_arr[f]))])
                 sim.assign(r, pos[f], GoalKind.FRONTIER, path)
                 self.choices += 1
             return
@@ -190,7 +190,7 @@ class UtilityStrategy:
                 break
             k, f = free_r[i], cols[j]
             r = members[k]
-            path = np.vstack([sim.pos[r : r + 1], coarse.path(pred[k], int(nodes_arr[f]))])
+            path = np.vstack([sim.pos[r : r + 1], geo.path(k, int(nodes_arr[f]))])
             sim.assign(r, pos[f], GoalKind.FRONTIER, path)
             self.choices += 1
             free_r.remove(k)
