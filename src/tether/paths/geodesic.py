@@ -27,8 +27,6 @@ from tether import jit
 
 __all__ = ["CoarseGrid", "Geodesics"]
 
-NO_PRED = -9999  # scipy's predecessor of a source or of an unreached node
-
 
 class CoarseGrid:
     """8-connected graph of traversable coarse cells of a free mask.
@@ -184,15 +182,7 @@ class CoarseGrid:
         padded[1:-1, 1:-1] = self.traversable
         flat = (self.cells[:, 0] + 1) * (cy + 2) + self.cells[:, 1] + 1
         w_orth, w_diag = self.factor * 1.0, self.factor * np.sqrt(2.0)  # as _build_graph
-        dist, pred, tie = grid_dijkstra_kernel(padded, w_orth, w_diag, flat[sources],
-                                               predecessors)  # fmt: skip
-        dist = dist[:, flat]
-        if not predecessors:
-            return (dist,)
-        node = np.full(padded.size + 1, NO_PRED, dtype=np.int32)  # [-1]: NO_PRED
-        node[flat] = np.arange(self.n_nodes, dtype=np.int32)
-        pred = pred[:, flat]
-        return dist, node[np.where(pred >= 0, pred, -1)], tie[:, flat]
+        return grid_dijkstra_kernel(padded, flat, w_orth, w_diag, sources, predecessors)
 
     def path(self, pred_row: np.ndarray, target: int) -> np.ndarray:
         """Fine waypoints from the Dijkstra source to ``target`` (source included)."""

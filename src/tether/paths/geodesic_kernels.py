@@ -49,23 +49,28 @@ def _offsets(width):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def grid_dijkstra_kernel(free, w_orth, w_diag, sources, with_pred):  # noqa: ANN001, ANN201
-    """Distances, predecessors and ties ``(k, cells)`` from each source cell.
+def grid_dijkstra_kernel(free, nodes, w_orth, w_diag, sources, with_pred):  # noqa: ANN001, ANN201
+    """Distances, predecessors and ties ``(k, n)`` from each source node.
 
     ``free``: the traversable mask with a border of blocked cells (``(cx + 2, cy + 2)``);
-    cells are its raveled (C-order) indices, ``sources`` too. Orthogonal neighbours
-    cost ``w_orth``, diagonal ones ``w_diag`` when both orthogonal cells between are
-    traversable (no corner cut). Unreached cells get ``inf`` and :data:`NO_PRED`, as
-    the source. Without ``with_pred`` the last two arrays are empty.
+    ``nodes``: the raveled (C-order) index in it of each node's cell; ``sources``: node
+    ids. Orthogonal neighbours cost ``w_orth``, diagonal ones ``w_diag`` when both
+    orthogonal cells between are traversable (no corner cut). Unreached nodes get
+    ``inf`` and :data:`NO_PRED`, as the source. Without ``with_pred`` the last two
+    arrays are empty.
     """
     width = free.shape[1]
     size = free.size
     flat = free.ravel()
+    n = len(nodes)
     k = len(sources)
-    dist = np.full((k, size), np.inf)
+    dist = np.empty((k, n))
     rows = k if with_pred else 0
-    pred = np.full((rows, size), NO_PRED, np.int64)
-    tie = np.zeros((rows, size), np.bool_)
+    pred = np.full((rows, n), NO_PRED, np.int32)
+    tie = np.zeros((rows, n), np.bool_)
+    node_of = np.full(size, NO_PRED, np.int32)
+    for i in range(n):
+        node_of[nodes[i]] = i
     step, via_x, via_y = _offsets(width)
     cost = np.empty(8)
     cost[:4] = w_orth
@@ -73,15 +78,16 @@ def grid_dijkstra_kernel(free, w_orth, w_diag, sources, with_pred):  # noqa: ANN
     bucket = min(w_orth, w_diag) * BUCKET_SHRINK
     ring = int(math.ceil(max(w_orth, w_diag) / bucket)) + 3
     head = np.empty(ring, np.int64)
-    cap = 8 * size + 1  # each entry: the source, or a strict decrease along an edge
+    cap = 8 * n + 1  # each entry: the source, or a strict decrease along an edge
     nxt = np.empty(cap, np.int64)
     item = np.empty(cap, np.int64)
     done = np.zeros(size, np.bool_)
+    d = np.empty(size)
     for row in range(k):
-        d = dist[row]
+        d[:] = np.inf
         head[:] = -1
         done[:] = False
-        s = sources[row]
+        s = nodes[sources[row]]
         d[s] = 0.0
         item[0] = s
         nxt[0] = -1
@@ -102,12 +108,12 @@ def grid_dijkstra_kernel(free, w_orth, w_diag, sources, with_pred):  # noqa: ANN
                 du = d[u]
                 for j in range(8):
                     v = u + step[j]
-                    if not flat[v] or done[v]:
+                    if not flat[v]:
                         continue
                     if j >= 4 and not (flat[u + via_x[j]] and flat[u + via_y[j]]):
                         continue
                     nd = du + cost[j]
-                    if nd < d[v]:
+                    if nd < d[v]:  # never for a settled v: its label is <= du
                         d[v] = nd
                         t = int(nd / bucket) % ring
                         item[used] = v
@@ -116,17 +122,20 @@ def grid_dijkstra_kernel(free, w_orth, w_diag, sources, with_pred):  # noqa: ANN
                         used += 1
                         pending += 1
             b += 1
+        for i in range(n):
+            dist[row, i] = d[nodes[i]]
         if with_pred:
-            _predecessors(flat, d, s, step, via_x, via_y, cost, pred[row], tie[row])
+            _predecessors(flat, d, nodes, node_of, step, via_x, via_y, cost, pred[row], tie[row])
     return dist, pred, tie
 
 
 @njit(cache=True)
-def _predecessors(flat, d, s, step, via_x, via_y, cost, p, t):  # noqa: ANN001, ANN202
-    """scipy's predecessor of every reached cell but the source, and its ``tie`` flag."""
-    for x in range(len(flat)):
+def _predecessors(flat, d, nodes, node_of, step, via_x, via_y, cost, p, t):  # noqa: ANN001, ANN202
+    """scipy's predecessor of every reached node but the source, and its ``tie`` flag."""
+    for i in range(len(nodes)):
+        x = nodes[i]
         dx = d[x]
-        if x == s or dx == np.inf:
+        if dx == 0.0 or dx == np.inf:  # the source (edges are positive) or unreached
             continue
         best = -1
         best_d = np.inf
@@ -141,15 +150,16 @@ def _predecessors(flat, d, s, step, via_x, via_y, cost, p, t):  # noqa: ANN001, 
                 if du < best_d:
                     best = u
                     best_d = du
-                    t[x] = False
+                    t[i] = False
                 elif du == best_d:
-                    t[x] = True
-        p[x] = best
+                    t[i] = True
+        p[i] = node_of[best]
 
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernel on a 3 x 3 grid."""
     free = np.zeros((5, 5), dtype=bool)
     free[1:4, 1:4] = True
+    nodes = np.flatnonzero(free.ravel())
     for with_pred in (False, True):
-        grid_dijkstra_kernel(free, 3.0, 3.0 * np.sqrt(2.0), np.array([6], np.int64), with_pred)
+        grid_dijkstra_kernel(free, nodes, 3.0, 3.0 * np.sqrt(2.0), np.array([4]), with_pred)
