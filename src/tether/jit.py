@@ -47,6 +47,7 @@ KERNEL_MODULES = (
     "graph/grid_kernels.py",
     "paths/geodesic_kernels.py",
     "recurrent/planning/steiner_kernels.py",
+    "recurrent/planning/expgraph_kernels.py",
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",
     "sensing/robots_kernels.py",

@@ -385,6 +385,9 @@ def warm_up() -> float:
     from tether.paths.geodesic_kernels import warm_up as geodesic_warm_up
 
     geodesic_warm_up()
+    from tether.recurrent.planning.expgraph_kernels import warm_up as expgraph_warm_up
+
+    expgraph_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds

@@ -42,8 +42,7 @@ from typing import Any
 import numpy as np
 
 from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
-from tether.recurrent.planning.expgraph import snap_cluster, window_counts
-from tether.recurrent.planning.frontiers import frontier_clusters
+from tether.recurrent.planning.expgraph import frontier_nodes, window_counts
 
 __all__ = ["UtilityStrategy"]
 
@@ -145,10 +144,10 @@ class UtilityStrategy:
         for s in src:
             allowed |= comp == comp[s]
         nodes = []
-        for cluster in frontier_clusters(
-            known, sim.occupied, sim.cfg.min_cluster_cells, sim.cfg.max_cluster_extent
-        ):
-            nd = snap_cluster(cluster, coarse, allowed)
+        for nd in frontier_nodes(
+            known, sim.occupied, coarse, allowed, sim.cfg.min_cluster_cells,
+            sim.cfg.max_cluster_extent,
+        ):  # fmt: skip
             if nd >= 0 and nd not in nodes:
                 nodes.append(nd)
         if self.coordination == "greedy":
