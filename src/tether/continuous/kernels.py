@@ -388,6 +388,9 @@ def warm_up() -> float:
     from tether.recurrent.planning.expgraph_kernels import warm_up as expgraph_warm_up
 
     expgraph_warm_up()
+    from tether.sensing.depth_kernels import warm_up as depth_warm_up
+
+    depth_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds
