@@ -48,6 +48,7 @@ KERNEL_MODULES = (
     "paths/geodesic_kernels.py",
     "recurrent/planning/steiner_kernels.py",
     "recurrent/planning/expgraph_kernels.py",
+    "recurrent/planning/apx_kernels.py",
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",
     "sensing/robots_kernels.py",

@@ -391,6 +391,9 @@ def warm_up() -> float:
     from tether.sensing.depth_kernels import warm_up as depth_warm_up
 
     depth_warm_up()
+    from tether.recurrent.planning.apx_kernels import warm_up as apx_warm_up
+
+    apx_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds
