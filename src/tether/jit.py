@@ -43,6 +43,7 @@ KERNEL_MODULES = (
     "comm_kernels.py",
     "world/clearance_kernels.py",
     "world/los_kernels.py",
+    "paths/astar_kernels.py",
     "graph/kernels.py",
     "graph/grid_kernels.py",
     "paths/geodesic_kernels.py",

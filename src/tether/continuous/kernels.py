@@ -382,6 +382,9 @@ def warm_up() -> float:
     from tether.graph.grid_kernels import warm_up as grid_warm_up
 
     grid_warm_up()
+    from tether.paths.astar_kernels import warm_up as astar_warm_up
+
+    astar_warm_up()
     from tether.paths.geodesic_kernels import warm_up as geodesic_warm_up
 
     geodesic_warm_up()

@@ -252,7 +252,7 @@ class ConnectivityStrategy(Strategy):
     ) -> None:
         """One-line ``ScenarioError`` unless the initial weighted graph is in the safe set."""
         conn = params.connectivity()
-        graph = compute_weights(initial.positions, conn, ObstacleIndex.from_world(world))
+        graph = compute_weights(initial.positions, conn, ObstacleIndex.shared(world))
         lam, _ = graph.fiedler()
         if not lam > conn.lambda2_min:
             raise ScenarioError(
@@ -267,7 +267,7 @@ class ConnectivityStrategy(Strategy):
     def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
         super().reset(world, state, rng)
         self.world = world
-        self.obstacles = ObstacleIndex.from_world(world)
+        self.obstacles = ObstacleIndex.shared(world)
         self.n = state.n
         self._nu: np.ndarray | None = None
         self._held: np.ndarray | None = None
