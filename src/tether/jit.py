@@ -47,10 +47,14 @@ KERNEL_MODULES = (
     "graph/kernels.py",
     "graph/grid_kernels.py",
     "graph/link_kernels.py",
+    "paths/geodesic_kernels.py",
     "recurrent/planning/steiner_kernels.py",
+    "recurrent/planning/expgraph_kernels.py",
+    "recurrent/planning/apx_kernels.py",
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",
     "sensing/robots_kernels.py",
+    "sensing/depth_kernels.py",
 )
 
 _forced: bool | None = None

@@ -460,6 +460,18 @@ def warm_up() -> float:
     from tether.graph.link_kernels import warm_up as link_warm_up
 
     link_warm_up()
+    from tether.paths.geodesic_kernels import warm_up as geodesic_warm_up
+
+    geodesic_warm_up()
+    from tether.recurrent.planning.expgraph_kernels import warm_up as expgraph_warm_up
+
+    expgraph_warm_up()
+    from tether.sensing.depth_kernels import warm_up as depth_warm_up
+
+    depth_warm_up()
+    from tether.recurrent.planning.apx_kernels import warm_up as apx_warm_up
+
+    apx_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds
