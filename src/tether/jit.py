@@ -45,6 +45,8 @@ KERNEL_MODULES = (
     "world/los_kernels.py",
     "graph/kernels.py",
     "graph/grid_kernels.py",
+    "graph/spectrum_kernels.py",
+    "graph/metrics_kernels.py",
     "recurrent/planning/steiner_kernels.py",
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",

@@ -212,13 +212,17 @@ def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generat
     else:
         e_r = sensor.radial_error_m * _SIGNS[rng.integers(0, 2, size=k)]
         e_a = sensor.angular_error_rad * _SIGNS[rng.integers(0, 2, size=k)]
-    if dim == 2:  # random_perpendicular's draws
-        sign, normal = _SIGNS[rng.integers(0, 2, size=k)], np.empty((0, dim))
+    if dim == 2:  # random_perpendicular's draws: the kernel maps bit b to _SIGNS[b]
+        bit, normal = rng.integers(0, 2, size=k), _NO_NORMALS
     else:
-        sign, normal = np.empty(0), rng.normal(size=(k, dim))
+        bit, normal = _NO_BITS, rng.normal(size=(k, dim))
     from tether.sensing.robots_kernels import noise_kernel
 
-    return noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), sign, normal)
+    return noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), bit, normal)
+
+
+_NO_NORMALS = np.empty((0, 2))  # placeholders of the draws a dimension does not use
+_NO_BITS = np.empty(0, dtype=np.int64)
 
 
 def _directed(pairs: np.ndarray, positions: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
@@ -257,18 +261,23 @@ def sense(
 
         if n <= KERNEL_PAIRS_MAX_N and (world is None or not world.has_obstacles):
             radius = float(sensor.body_radius_m) if sensor.occlusion else 0.0
-            pairs, directed, indptr, rel = kernels.sense_pairs_kernel(
+            pairs, indptr, target, rel = kernels.sense_pairs_kernel(
                 positions, float(sensor.range_m), radius
             )
         else:
             pairs = sensed_pairs(positions, sensor, world)
-            directed, indptr, rel = kernels.directed_kernel(pairs.astype(np.int64), positions, n)
-        indptr = indptr.astype(np.intp)
+            indptr, target, rel = kernels.directed_kernel(pairs.astype(np.int64), positions, n)
         measured = _noisy_compiled(rel, sensor, rng)
-    else:
-        pairs = sensed_pairs(positions, sensor, world)
-        directed, indptr, rel = _directed(pairs, positions, n)
-        measured = _noisy(rel, sensor, rng)
+        return Observation(
+            pairs=pairs,
+            indptr=indptr.astype(np.intp, copy=False),
+            target=target.astype(np.intp, copy=False),
+            measured=measured,
+            true_relative=rel,
+        )
+    pairs = sensed_pairs(positions, sensor, world)
+    directed, indptr, rel = _directed(pairs, positions, n)
+    measured = _noisy(rel, sensor, rng)
     return Observation(
         pairs=pairs,
         indptr=indptr,

@@ -9,7 +9,8 @@ Three kernels, each the arithmetic of its reference, term for term:
   coordinate order, over ``i``'s range-neighbours, robot by robot instead of numpy
   arrays of ``sum_i deg_i^2`` candidates;
 * :func:`directed_kernel` -- :func:`~tether.sensing.robots._directed`: both directions
-  of every pair sorted by (observer, target) with a counting sort and relatives;
+  of every pair sorted by (observer, target) with a counting sort (CSR row pointers and
+  targets) and relatives;
 * :func:`sense_pairs_kernel` -- for small teams in free space, the three steps before
   the noise in one call (range by :func:`~tether.graph.kernels.pairs_within_kernel`,
   occlusion, CSR): numba's dispatch costs microseconds per call and argument;
@@ -126,7 +127,11 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
 
 @njit(cache=True)
 def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
-    """``_directed``: directed pairs sorted by (observer, target), CSR indptr, relatives."""
+    """``_directed`` by a counting sort: CSR indptr, targets (by observer, then target), relatives.
+
+    The directed pair of entry ``e`` is ``(observer, target[e])``, the observer being the
+    row of ``indptr`` that holds ``e``.
+    """
     m = len(pairs)
     dim = positions.shape[1]
     indptr = np.zeros(n + 1, np.int64)
@@ -143,7 +148,6 @@ def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
         fill[a] += 1
         target[fill[b]] = a
         fill[b] += 1
-    directed = np.empty((2 * m, 2), np.int64)
     rel = np.empty((2 * m, dim))
     for v in range(n):
         lo, hi = indptr[v], indptr[v + 1]
@@ -155,18 +159,16 @@ def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
                 f -= 1
             target[f] = t
         for e in range(lo, hi):
-            directed[e, 0] = v
-            directed[e, 1] = target[e]
             for c in range(dim):
                 rel[e, c] = positions[target[e], c] - positions[v, c]
-    return directed, indptr, rel
+    return indptr, target, rel
 
 
 @njit(cache=True)
 def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN201
     """Sensed pairs (no obstacles; occlusion if ``body_radius_m > 0``), then ``_directed``.
 
-    Returns ``(pairs, directed, indptr, rel)`` as :func:`~tether.sensing.robots.sense`
+    Returns ``(pairs, indptr, target, rel)`` as :func:`~tether.sensing.robots.sense`
     builds them; all pairs are tested (teams of up to a few hundred robots).
     """
     n = positions.shape[0]
@@ -179,8 +181,8 @@ def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN2
                 pairs[keep, 0], pairs[keep, 1] = pairs[p, 0], pairs[p, 1]
                 keep += 1
         pairs = pairs[:keep].copy()
-    directed, indptr, rel = directed_kernel(pairs, positions, n)
-    return pairs, directed, indptr, rel
+    indptr, target, rel = directed_kernel(pairs, positions, n)
+    return pairs, indptr, target, rel
 
 
 @njit(cache=True)
@@ -196,11 +198,12 @@ def _unit_row(v, out):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def noise_kernel(rel, e_r, cos_a, sin_a, sign, normal):  # noqa: ANN001, ANN201, PLR0913
-    """``_noisy``'s measurements from its draws: ``sign`` (2-D) or ``normal`` (3-D).
+def noise_kernel(rel, e_r, cos_a, sin_a, bit, normal):  # noqa: ANN001, ANN201, PLR0913
+    """``_noisy``'s measurements from its draws: ``bit`` (2-D) or ``normal`` (3-D).
 
-    2-D: the perpendicular is ``(-u_1, u_0) * sign``; 3-D: ``normal`` minus its
-    component along ``u``, normalised (``u x e_x`` when that is below 1e-9), as
+    2-D: the perpendicular is ``(-u_1, u_0) * sign`` with ``sign = (-1, 1)[bit]`` (the
+    draws of ``rng.choice([-1, 1])``); 3-D: ``normal`` minus its component along ``u``,
+    normalised (``u x e_x`` when that is below 1e-9), as
     :func:`tether.geometry.random_perpendicular`.
     """
     k, dim = rel.shape
@@ -211,8 +214,9 @@ def noise_kernel(rel, e_r, cos_a, sin_a, sign, normal):  # noqa: ANN001, ANN201,
     for q in range(k):
         dist = _unit_row(rel[q], u)
         if dim == 2:
-            perp[0] = -u[1] * sign[q]
-            perp[1] = u[0] * sign[q]
+            sign = 1.0 if bit[q] else -1.0
+            perp[0] = -u[1] * sign
+            perp[1] = u[0] * sign
         else:
             dot = _einsum_dot(normal[q], u)
             for c in range(dim):
@@ -240,4 +244,5 @@ def warm_up() -> None:
         sense_pairs_kernel(pos, 3.0, 0.5)
         _, _, rel = directed_kernel(pairs, pos, 3)
         k = len(rel)
-        noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), np.ones(k), np.ones((k, dim)))
+        bits = np.ones(k, np.int64)
+        noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), bits, np.ones((k, dim)))

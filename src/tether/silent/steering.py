@@ -247,6 +247,51 @@ def constrained_steps(
     return steps
 
 
+def team_steps(
+    measured: np.ndarray,
+    indptr: np.ndarray,
+    leader: int,
+    leader_step: np.ndarray,
+    *,
+    cost: Cost = "desired_distance",
+    gamma: float = 0.2,
+    d0_m: float = 8.0,
+    d_max_m: float,
+    radial_error_m: float = 0.0,
+    angular_error_rad: float = 0.0,
+    min_separation_m: float = 0.0,
+    max_step_m: float = np.inf,
+    search_directions: bool = False,
+) -> np.ndarray:
+    """One step of the Local Steering Strategy for a team led by robot ``leader``.
+
+    The followers' desired steps (:func:`desired_steps`), the leader's replaced by
+    ``leader_step`` (its step towards its trajectory), then :func:`constrained_steps`
+    for everybody (the paper's section IV: the leader obeys (1)-(2) too). Measurements
+    are an :class:`~tether.sensing.Observation`'s CSR rows (``indptr``, one row per
+    robot). For cost (13), with the compiled kernels (:func:`_use_kernel`), one call
+    of :func:`tether.silent.steering_kernels.team_steps_kernel` gives the same steps,
+    bit for bit, as the kernels of the three steps.
+    """
+    n = len(indptr) - 1
+    kw = dict(d_max_m=d_max_m, radial_error_m=radial_error_m,
+              angular_error_rad=angular_error_rad, min_separation_m=min_separation_m,
+              max_step_m=max_step_m, search_directions=search_directions)  # fmt: skip
+    if cost == "desired_distance" and _use_kernel(n) and measured.ndim == 2:
+        from tether.silent.steering_kernels import team_steps_kernel
+
+        return team_steps_kernel(
+            np.ascontiguousarray(measured, dtype=float), indptr.astype(np.int64, copy=False),
+            int(leader), np.asarray(leader_step, dtype=float), float(gamma), float(d0_m),
+            float(d_max_m), float(radial_error_m), float(angular_error_rad),
+            float(min_separation_m), float(max_step_m), bool(search_directions),
+        )  # fmt: skip
+    observer = np.repeat(np.arange(n), np.diff(indptr))
+    desired = desired_steps(measured, observer, n, cost=cost, gamma=gamma, d0_m=d0_m)
+    desired[leader] = leader_step
+    return constrained_steps(desired, measured, observer, indptr=indptr, **kw)
+
+
 def satisfies_constraints(
     step: np.ndarray,
     rel_true: np.ndarray,

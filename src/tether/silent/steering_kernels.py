@@ -157,6 +157,36 @@ def desired_distance_kernel(measured, observer, n, gamma, d0_m):  # noqa: ANN001
     return out
 
 
+@njit(cache=True)
+def team_steps_kernel(  # noqa: ANN201, PLR0913
+    measured, indptr, leader, leader_step, gamma, d0_m, d_max, r_err, ang, min_sep, max_step,
+    search,
+):  # noqa: ANN001
+    """:func:`~tether.silent.steering.team_steps` for cost (13) in one call.
+
+    The desired steps (15) summed per robot over its CSR row (the terms in measurement
+    order, as :func:`desired_distance_kernel` and ``np.add.at`` add them), the leader's
+    replaced by ``leader_step``, then :func:`constrained_steps_kernel`: the same values,
+    bit for bit, as the three steps called one by one.
+    """
+    n = len(indptr) - 1
+    dim = measured.shape[1]
+    desired = np.zeros((n, dim))
+    u = np.empty(dim)
+    scale = 2.0 * gamma
+    for i in range(n):
+        for q in range(indptr[i], indptr[i + 1]):
+            dist = _unit_row(measured[q], u)
+            f = scale * (dist - d0_m)
+            for c in range(dim):
+                desired[i, c] += f * u[c]
+    for c in range(dim):
+        desired[leader, c] = leader_step[c]
+    return constrained_steps_kernel(
+        desired, measured, indptr, d_max, r_err, ang, min_sep, max_step, search
+    )
+
+
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernel for 2-D and 3-D teams."""
     for dim in (2, 3):
@@ -166,3 +196,6 @@ def warm_up() -> None:
         for search in (False, True):
             constrained_steps_kernel(desired, measured, indptr, 15.0, 0.4, 0.2, 0.5, np.inf, search)
         desired_distance_kernel(measured, indptr[:-1].copy(), 2, 0.2, 8.0)
+        for search in (False, True):
+            team_steps_kernel(measured, indptr, 0, desired[0], 0.2, 8.0, 15.0, 0.4, 0.2, 0.5,
+                              np.inf, search)  # fmt: skip
