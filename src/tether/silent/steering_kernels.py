@@ -161,7 +161,7 @@ def desired_distance_kernel(measured, observer, n, gamma, d0_m):  # noqa: ANN001
 def team_steps_kernel(  # noqa: ANN201, PLR0913
     measured, indptr, leader, leader_step, gamma, d0_m, d_max, r_err, ang, min_sep, max_step,
     search,
-):  # noqa: ANN001
+):  # noqa: ANN001  # fmt: skip
     """:func:`~tether.silent.steering.team_steps` for cost (13) in one call.
 
     The desired steps (15) summed per robot over its CSR row (the terms in measurement
