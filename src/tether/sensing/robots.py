@@ -198,6 +198,18 @@ def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np
 _SIGNS = np.array([-1.0, 1.0])
 
 
+def _coin_flips(rng: np.random.Generator, k: int) -> np.ndarray:
+    """``rng.integers(0, 2, size=k)`` as ``k`` float32 draws: ``1`` where ``>= 0.5``.
+
+    Both consume one ``next_uint32`` of the bit generator per draw (its buffered half
+    words included): ``integers`` keeps the top bit (Lemire's method with a range of 2,
+    ``(u * 2) >> 32``, never rejects), ``random(dtype=float32)`` returns
+    ``(u >> 8) / 2^24``, which is ``>= 0.5`` exactly when that bit is set. The same
+    stream and the same values (tests: bit for bit), at a third of ``integers``' cost.
+    """
+    return rng.random(k, dtype=np.float32)
+
+
 def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
     """:func:`_noisy` with the arithmetic compiled: the same draws, in the same order.
 
@@ -212,17 +224,17 @@ def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generat
     else:
         e_r = sensor.radial_error_m * _SIGNS[rng.integers(0, 2, size=k)]
         e_a = sensor.angular_error_rad * _SIGNS[rng.integers(0, 2, size=k)]
-    if dim == 2:  # random_perpendicular's draws: the kernel maps bit b to _SIGNS[b]
-        bit, normal = rng.integers(0, 2, size=k), _NO_NORMALS
+    if dim == 2:  # random_perpendicular's signs, as coin flips
+        flip, normal = _coin_flips(rng, k), _NO_NORMALS
     else:
-        bit, normal = _NO_BITS, rng.normal(size=(k, dim))
+        flip, normal = _NO_FLIPS, rng.normal(size=(k, dim))
     from tether.sensing.robots_kernels import noise_kernel
 
-    return noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), bit, normal)
+    return noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), flip, normal)
 
 
 _NO_NORMALS = np.empty((0, 2))  # placeholders of the draws a dimension does not use
-_NO_BITS = np.empty(0, dtype=np.int64)
+_NO_FLIPS = np.empty(0, dtype=np.float32)
 
 
 def _directed(pairs: np.ndarray, positions: np.ndarray, n: int) -> tuple[np.ndarray, ...]:

@@ -198,12 +198,13 @@ def _unit_row(v, out):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def noise_kernel(rel, e_r, cos_a, sin_a, bit, normal):  # noqa: ANN001, ANN201, PLR0913
-    """``_noisy``'s measurements from its draws: ``bit`` (2-D) or ``normal`` (3-D).
+def noise_kernel(rel, e_r, cos_a, sin_a, flip, normal):  # noqa: ANN001, ANN201, PLR0913
+    """``_noisy``'s measurements from its draws: ``flip`` (2-D) or ``normal`` (3-D).
 
-    2-D: the perpendicular is ``(-u_1, u_0) * sign`` with ``sign = (-1, 1)[bit]`` (the
-    draws of ``rng.choice([-1, 1])``); 3-D: ``normal`` minus its component along ``u``,
-    normalised (``u x e_x`` when that is below 1e-9), as
+    2-D: the perpendicular is ``(-u_1, u_0) * sign``, ``sign = 1`` where ``flip >= 0.5``
+    and -1 elsewhere (``rng.choice([-1, 1])``'s draws: see
+    :func:`~tether.sensing.robots._coin_flips`); 3-D: ``normal`` minus its component
+    along ``u``, normalised (``u x e_x`` when that is below 1e-9), as
     :func:`tether.geometry.random_perpendicular`.
     """
     k, dim = rel.shape
@@ -214,7 +215,7 @@ def noise_kernel(rel, e_r, cos_a, sin_a, bit, normal):  # noqa: ANN001, ANN201, 
     for q in range(k):
         dist = _unit_row(rel[q], u)
         if dim == 2:
-            sign = 1.0 if bit[q] else -1.0
+            sign = 1.0 if flip[q] >= 0.5 else -1.0
             perp[0] = -u[1] * sign
             perp[1] = u[0] * sign
         else:
@@ -244,5 +245,5 @@ def warm_up() -> None:
         sense_pairs_kernel(pos, 3.0, 0.5)
         _, _, rel = directed_kernel(pairs, pos, 3)
         k = len(rel)
-        bits = np.ones(k, np.int64)
-        noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), bits, np.ones((k, dim)))
+        flips = np.ones(k, np.float32)
+        noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), flips, np.ones((k, dim)))
