@@ -36,18 +36,19 @@ from tether.graph.kernels import pairs_within_kernel
 EPS = 1e-12  # tether.geometry.unit's default
 
 
-@njit(cache=True)
-def _einsum_dot(a, b):  # noqa: ANN001, ANN202
-    """``np.einsum("kd,kd->k")`` for one row, in its summation order.
+@njit(cache=True, inline="always")
+def _dot_rows(a, i, b, j):  # noqa: ANN001, ANN202
+    """``np.einsum("kd,kd->k")`` of rows ``a[i]`` and ``b[j]``, in its summation order.
 
     numpy's inner loop adds two lanes: ``a_0 b_0 + a_1 b_1`` in 2-D,
-    ``(a_0 b_0 + a_2 b_2) + a_1 b_1`` in 3-D (tests compare bit for bit).
+    ``(a_0 b_0 + a_2 b_2) + a_1 b_1`` in 3-D (tests compare bit for bit). Rows are
+    passed by index: a row view would cost a reference count per call.
     """
-    if len(a) == 3:
-        return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
+    if a.shape[1] == 3:
+        return (a[i, 0] * b[j, 0] + a[i, 2] * b[j, 2]) + a[i, 1] * b[j, 1]
     s = 0.0
-    for c in range(len(a)):
-        s += a[c] * b[c]
+    for c in range(a.shape[1]):
+        s += a[i, c] * b[j, c]
     return s
 
 
@@ -86,14 +87,13 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
         return out
     indptr, nbr = _neighbours(n, pairs)
     d2 = np.empty(len(nbr))
-    ik = np.empty(dim)
-    ij = np.empty(dim)
+    w = np.empty((2, dim))  # rows: i -> j, i -> k
     for i in range(n):
         lo, hi = indptr[i], indptr[i + 1]
         for e in range(lo, hi):
             for c in range(dim):
-                ij[c] = positions[nbr[e], c] - positions[i, c]
-            d2[e] = _einsum_dot(ij, ij)
+                w[0, c] = positions[nbr[e], c] - positions[i, c]
+            d2[e] = _dot_rows(w, 0, w, 0)
         for e in range(lo + 1, hi):  # insertion sort by squared distance
             j, dj = nbr[e], d2[e]
             f = e
@@ -105,8 +105,8 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
     for p in range(m):
         i, k = pairs[p, 0], pairs[p, 1]
         for c in range(dim):
-            ik[c] = positions[k, c] - positions[i, c]
-        d2_ik = _einsum_dot(ik, ik)
+            w[1, c] = positions[k, c] - positions[i, c]
+        d2_ik = _dot_rows(w, 1, w, 1)
         for e in range(indptr[i], indptr[i + 1]):
             d2_ij = d2[e]
             if not d2_ij < d2_ik:
@@ -115,8 +115,8 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
             if j == k:
                 continue
             for c in range(dim):
-                ij[c] = positions[j, c] - positions[i, c]
-            proj = _einsum_dot(ij, ik)
+                w[0, c] = positions[j, c] - positions[i, c]
+            proj = _dot_rows(w, 0, w, 1)
             d2_kj = d2_ik - 2.0 * proj + d2_ij
             perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
             if d2_kj < d2_ik and perp2 < r2:
@@ -185,15 +185,16 @@ def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN2
     return pairs, indptr, target, rel
 
 
-@njit(cache=True)
-def _unit_row(v, out):  # noqa: ANN001, ANN202
-    """``out = unit(v)`` as :func:`tether.geometry.unit`; returns ``||v||``."""
+@njit(cache=True, inline="always")
+def _unit_rows(v, i, out, j):  # noqa: ANN001, ANN202
+    """``out[j] = unit(v[i])`` as :func:`tether.geometry.unit`; returns ``||v[i]||``."""
+    dim = v.shape[1]
     s = 0.0
-    for c in range(len(v)):
-        s += v[c] * v[c]
+    for c in range(dim):
+        s += v[i, c] * v[i, c]
     norm = math.sqrt(s)
-    for c in range(len(v)):
-        out[c] = v[c] / max(norm, EPS) if norm > EPS else 0.0
+    for c in range(dim):
+        out[j, c] = v[i, c] / max(norm, EPS) if norm > EPS else 0.0
     return norm
 
 
@@ -209,30 +210,28 @@ def noise_kernel(rel, e_r, cos_a, sin_a, flip, normal):  # noqa: ANN001, ANN201,
     """
     k, dim = rel.shape
     out = np.empty((k, dim))
-    u = np.empty(dim)
-    perp = np.empty(dim)
-    r = np.empty(dim)
+    w = np.empty((3, dim))  # rows: u, the perpendicular, its raw direction
     for q in range(k):
-        dist = _unit_row(rel[q], u)
+        dist = _unit_rows(rel, q, w, 0)
         if dim == 2:
             sign = 1.0 if flip[q] >= 0.5 else -1.0
-            perp[0] = -u[1] * sign
-            perp[1] = u[0] * sign
+            w[1, 0] = -w[0, 1] * sign
+            w[1, 1] = w[0, 0] * sign
         else:
-            dot = _einsum_dot(normal[q], u)
+            dot = _dot_rows(normal, q, w, 0)
             for c in range(dim):
-                r[c] = normal[q, c] - dot * u[c]
+                w[2, c] = normal[q, c] - dot * w[0, c]
             s = 0.0
             for c in range(dim):
-                s += r[c] * r[c]
+                s += w[2, c] * w[2, c]
             if math.sqrt(s) < 1e-9:  # np.cross(u, (1, 0, 0))
-                r[0] = u[1] * 0.0 - u[2] * 0.0
-                r[1] = u[2] * 1.0 - u[0] * 0.0
-                r[2] = u[0] * 0.0 - u[1] * 1.0
-            _unit_row(r, perp)
+                w[2, 0] = w[0, 1] * 0.0 - w[0, 2] * 0.0
+                w[2, 1] = w[0, 2] * 1.0 - w[0, 0] * 0.0
+                w[2, 2] = w[0, 0] * 0.0 - w[0, 1] * 1.0
+            _unit_rows(w, 2, w, 1)
         scale = max(dist + e_r[q], 0.0)
         for c in range(dim):
-            out[q, c] = (cos_a[q] * u[c] + sin_a[q] * perp[c]) * scale
+            out[q, c] = (cos_a[q] * w[0, c] + sin_a[q] * w[1, c]) * scale
     return out
 
 
