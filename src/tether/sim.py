@@ -23,6 +23,8 @@ import os
 import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from functools import cache
+from types import ModuleType
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
@@ -242,17 +244,23 @@ def team_metrics(
     return StepRecord(step, t_s, n_comp <= 1, n_comp, len(obs.pairs), lam, float(d), len(close))
 
 
+@cache
+def _metrics_kernels() -> ModuleType:
+    """:mod:`tether.graph.metrics_kernels`, imported on first use (it loads numba)."""
+    from tether.graph import metrics_kernels
+
+    return metrics_kernels
+
+
 def _team_metrics_compiled(
     step: int, t_s: float, positions: np.ndarray, obs: Observation, collision_distance_m: float
 ) -> StepRecord:
     """:func:`team_metrics` in one compiled call (the graph's part skipped on a cache hit)."""
-    from tether.graph.metrics_kernels import team_metrics_kernel
-
     n = obs.n
     pairs = np.ascontiguousarray(obs.pairs, dtype=np.int64).reshape(-1, 2)
     key = ("compiled", n, pairs.shape, pairs.tobytes())
     hit = _GRAPH_CACHE["key"] == key
-    n_comp, lam, d, close = team_metrics_kernel(
+    n_comp, lam, d, close = _metrics_kernels().team_metrics_kernel(
         n, pairs, np.ascontiguousarray(positions, dtype=float),
         np.ascontiguousarray(obs.true_relative, dtype=float), float(collision_distance_m),
         not hit,

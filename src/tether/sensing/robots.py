@@ -24,6 +24,8 @@ bound with random sign (the worst case for the constraints).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
+from types import ModuleType
 from typing import Literal
 
 import numpy as np
@@ -40,6 +42,17 @@ NoiseKind = Literal["none", "uniform", "bound"]
 #: TETHER_JIT=on): loading numba (about a second) would cost a short small-team run more
 #: than the kernels save (as :data:`tether.silent.steering.KERNEL_MIN_ROBOTS`)
 KERNEL_MIN_ROBOTS = 200
+
+
+@cache
+def _kernels() -> ModuleType:
+    """:mod:`tether.sensing.robots_kernels`, imported on first use (it loads numba).
+
+    Cached: an import statement run every step costs microseconds.
+    """
+    from tether.sensing import robots_kernels
+
+    return robots_kernels
 
 
 def _use_kernel(n: int) -> bool:
@@ -166,9 +179,10 @@ def sensed_pairs(
         keep &= world.segments_clear(positions[pairs[:, 0]], positions[pairs[:, 1]])
     if sensor.occlusion and sensor.body_radius_m > 0:
         if _use_kernel(len(positions)):
-            from tether.sensing.robots_kernels import occluded_kernel
-
-            keep &= ~occluded_kernel(positions, pairs.astype(np.int64), float(sensor.body_radius_m))
+            hidden = _kernels().occluded_kernel(
+                positions, pairs.astype(np.int64), float(sensor.body_radius_m)
+            )
+            keep &= ~hidden
         else:
             keep &= ~_occluded(positions, pairs, sensor.body_radius_m)
     return pairs[keep]
@@ -228,9 +242,7 @@ def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generat
         flip, normal = _coin_flips(rng, k), _NO_NORMALS
     else:
         flip, normal = _NO_FLIPS, rng.normal(size=(k, dim))
-    from tether.sensing.robots_kernels import noise_kernel
-
-    return noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), flip, normal)
+    return _kernels().noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), flip, normal)
 
 
 _NO_NORMALS = np.empty((0, 2))  # placeholders of the draws a dimension does not use
@@ -269,8 +281,7 @@ def sense(
     positions = np.ascontiguousarray(positions, dtype=float)
     n = len(positions)
     if _use_kernel(n) and positions.ndim == 2 and positions.shape[1] in (2, 3):
-        from tether.sensing import robots_kernels as kernels
-
+        kernels = _kernels()
         if n <= KERNEL_PAIRS_MAX_N and (world is None or not world.has_obstacles):
             radius = float(sensor.body_radius_m) if sensor.occlusion else 0.0
             pairs, indptr, target, rel = kernels.sense_pairs_kernel(
