@@ -10,8 +10,9 @@ than the arithmetic. Here, in one compiled call:
   (Golub and Van Loan, *Matrix Computations*, 4th ed., Alg. 8.3.1; LAPACK ``dsytd2``'s
   reflectors), ``4 n^3 / 3`` flops, no vectors accumulated;
 * the second eigenvalue of ``T`` by bisection on Sturm counts (Golub and Van Loan,
-  Sec. 8.4.1; LAPACK ``dstebz``'s negcount with its pivot guard), to one unit in the
-  last place of the bracket or an absolute ``eps * ||T||``.
+  Sec. 8.4.1; LAPACK ``dstebz``'s negcount with its pivot guard) until it is alone in
+  the bracket, then safeguarded Newton steps on the characteristic polynomial (its
+  logarithmic derivative from the same pivots), to an absolute ``eps * ||T||``.
 
 Both steps are backward stable, so the value agrees with ``eigh``'s to rounding
 (``O(n eps ||L||)``), not bit for bit (tests: 1e-12 against ``numpy.linalg.eigh`` on
@@ -35,8 +36,9 @@ SAFE_MIN = 2.2250738585072014e-308  # smallest normal float64
 def tridiagonal_kernel(a):  # noqa: ANN001, ANN201
     """Diagonal ``d`` (n) and off-diagonal ``e`` (n - 1) of ``Q^T A Q`` (Householder).
 
-    ``a`` (symmetric, ``(n, n)``) is overwritten. Column ``k``'s reflector maps
-    ``a[k+1:, k]`` to ``beta e_1`` with ``|beta| = ||a[k+1:, k]||``.
+    ``a`` (symmetric, ``(n, n)``; its lower triangle is read) is overwritten. Column
+    ``k``'s reflector maps ``a[k+1:, k]`` to ``beta e_1`` with
+    ``|beta| = ||a[k+1:, k]||``.
     """
     n = a.shape[0]
     d = np.empty(n)
@@ -57,14 +59,17 @@ def tridiagonal_kernel(a):  # noqa: ANN001, ANN201
         v[k + 1] = 1.0
         for i in range(k + 2, n):
             v[i] = a[i, k] * scale
-        # A22 <- H A22 H with H = I - tau v v^T: w = tau A22 v, w -= (tau/2)(w.v) v,
-        # A22 -= v w^T + w v^T
+        # A22 <- H A22 H with H = I - tau v v^T, on the lower triangle only:
+        # w = tau A22 v, w -= (tau/2)(w.v) v, A22 -= v w^T + w v^T
         for i in range(k + 1, n):
             w[i] = 0.0
-        for j in range(k + 1, n):  # by rows of the symmetric A22: no reduction chain
-            vj = tau * v[j]
-            for i in range(k + 1, n):
-                w[i] += a[j, i] * vj
+        for i in range(k + 1, n):
+            vi = tau * v[i]
+            s = 0.0
+            for j in range(k + 1, i):  # a[i, j] = a[j, i] below the diagonal
+                w[j] += a[i, j] * vi
+                s += a[i, j] * v[j]
+            w[i] += tau * (s + a[i, i] * v[i])
         vw = 0.0
         for i in range(k + 1, n):
             vw += w[i] * v[i]
@@ -72,8 +77,9 @@ def tridiagonal_kernel(a):  # noqa: ANN001, ANN201
         for i in range(k + 1, n):
             w[i] += alpha * v[i]
         for i in range(k + 1, n):
-            for j in range(k + 1, n):
-                a[i, j] -= v[i] * w[j] + w[i] * v[j]
+            vi, wi = v[i], w[i]
+            for j in range(k + 1, i + 1):
+                a[i, j] -= vi * w[j] + wi * v[j]
         e[k] = beta
     for k in range(n):
         d[k] = a[k, k]
@@ -101,8 +107,44 @@ def _count_below(d, e2, x, pivmin):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
+def _newton_pass(d, e2, x, pivmin):  # noqa: ANN001, ANN202
+    """:func:`_count_below` at ``x`` and ``S = d/dx log|det(T - x I)|``.
+
+    The pivots ``q_i`` of ``T - x I = L D L^T`` are those of the count; ``S`` sums
+    ``q_i' / q_i`` with ``q_i' = -1 + (e_{i-1}^2 / q_{i-1}) (q_{i-1}' / q_{i-1})``, so
+    ``x - 1 / S`` is Newton's step on the characteristic polynomial.
+    """
+    q = d[0] - x
+    if abs(q) < pivmin:
+        q = -pivmin
+    count = 1 if q <= 0.0 else 0
+    g = -1.0 / q
+    s = g
+    for i in range(1, len(d)):
+        t = e2[i - 1] / q
+        q = d[i] - t - x
+        if abs(q) < pivmin:
+            q = -pivmin
+        if q <= 0.0:
+            count += 1
+        g = (t * g - 1.0) / q
+        s += g
+    return count, s
+
+
+@njit(cache=True)
 def tridiagonal_eigenvalue_kernel(d, e, index):  # noqa: ANN001, ANN201
-    """The ``index``-th smallest eigenvalue (0-based) of the tridiagonal ``(d, e)``."""
+    """The ``index``-th smallest eigenvalue (0-based) of the tridiagonal ``(d, e)``.
+
+    Bisection on Sturm counts keeps a bracket ``[lo, hi]`` with
+    ``count(lo) <= index < count(hi)``. Once the bracket holds that eigenvalue alone,
+    Newton steps on the characteristic polynomial (:func:`_newton_pass`, each also a
+    Sturm count that shrinks the bracket) replace the halvings; a step leaving the
+    bracket is replaced by a halving, and a converged step (below ``eps ||T||``) is
+    accepted only if the counts at ``+-2 eps ||T||`` around it bracket the eigenvalue.
+    About 15 passes instead of 55 for a 20-node Laplacian; with a multiple eigenvalue
+    the bracket never isolates it and plain bisection finishes.
+    """
     n = len(d)
     e2 = np.empty(max(n - 1, 0))
     lo, hi, big = np.inf, -np.inf, 1.0
@@ -118,14 +160,39 @@ def tridiagonal_eigenvalue_kernel(d, e, index):  # noqa: ANN001, ANN201
     lo -= 2.0 * EPS * norm + pivmin
     hi += 2.0 * EPS * norm + pivmin
     atol = EPS * norm
-    for _ in range(200):  # ~60 halvings reach the tolerance from a bracket of ||T||
-        mid = 0.5 * (lo + hi)
-        if mid <= lo or mid >= hi or hi - lo <= atol:
+    count_lo, count_hi = 0, n
+    newton = False
+    x = 0.5 * (lo + hi)
+    for _ in range(300):  # bisection alone needs ~60 passes from a bracket of ||T||
+        if hi - lo <= atol:
             break
-        if _count_below(d, e2, mid, pivmin) > index:
-            hi = mid
+        if not newton and count_lo == index and count_hi == index + 1:
+            newton = True  # isolated: Newton from the bracket's middle
+            x = 0.5 * (lo + hi)
+        if not newton:
+            mid = 0.5 * (lo + hi)
+            if mid <= lo or mid >= hi:
+                break
+            c = _count_below(d, e2, mid, pivmin)
+            if c > index:
+                hi, count_hi = mid, c
+            else:
+                lo, count_lo = mid, c
+            continue
+        c, s = _newton_pass(d, e2, x, pivmin)
+        if c > index:
+            hi = x
         else:
-            lo = mid
+            lo = x
+        if s == 0.0 or not math.isfinite(s):
+            x = 0.5 * (lo + hi)
+            continue
+        nxt = x - 1.0 / s
+        if abs(nxt - x) <= atol:
+            below = _count_below(d, e2, nxt - 2.0 * atol, pivmin)
+            if below <= index < _count_below(d, e2, nxt + 2.0 * atol, pivmin):
+                return nxt
+        x = nxt if lo < nxt < hi else 0.5 * (lo + hi)
     return 0.5 * (lo + hi)
 
 
