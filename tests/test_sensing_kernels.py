@@ -90,3 +90,20 @@ def test_large_team_and_obstacles_take_the_split_path_bit_identically(noise: str
             fast = sense(pos, sensor, np.random.default_rng(9), world)
         for name in ("pairs", "indptr", "target", "measured", "true_relative"):
             np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name), name)
+
+
+def test_coin_flips_are_integers_draws() -> None:
+    """``random(dtype=float32) >= 0.5`` is ``integers(0, 2)``: the same values and the same
+    stream afterwards, with odd counts (a buffered half word) and other draws between."""
+    from tether.sensing.robots import _coin_flips
+
+    for seed in range(30):
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        for k in (0, 1, 2, 3, 7, 138, 241, 1):
+            for rng in (a, b):
+                rng.uniform(-1.0, 1.0, seed % 3)  # doubles between the flips
+            flips = _coin_flips(a, k)
+            assert flips.dtype == np.float32
+            np.testing.assert_array_equal((flips >= 0.5).astype(np.int64), b.integers(0, 2, k))
+        assert a.integers(0, 2**62) == b.integers(0, 2**62)
+        assert a.random() == b.random()

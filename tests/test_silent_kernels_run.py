@@ -10,6 +10,10 @@ Householder and bisection (:mod:`tether.graph.spectrum_kernels`), the reference 
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -42,3 +46,21 @@ def test_silent_demo_same_run_with_and_without_kernels(tmp_path) -> None:  # noq
                 assert np.ptp(ref[key]) > 0.1, "lambda2 should vary along the run"
             else:
                 np.testing.assert_array_equal(np.asarray(fast[key]), np.asarray(ref[key]), key)
+
+
+def test_a_small_silent_run_does_not_load_numba(tmp_path) -> None:  # noqa: ANN001
+    """Small teams use the kernels only once numba is loaded (or ``TETHER_JIT=on``):
+    with the kernels enabled but numba not imported, ``silent_demo`` (sensing,
+    strategy, metrics) runs the reference paths and never pays numba's start-up."""
+    code = (
+        "import sys\n"
+        "from tether import jit\n"
+        "jit.set_enabled(True)\n"
+        "from tether.runner import run\n"
+        "run('silent_demo', out_dir=sys.argv[1], seed=0, figures=False)\n"
+        "print('numba' in sys.modules)\n"
+    )
+    env = dict(os.environ, TETHER_JIT="auto")
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "run")], env=env,
+                         capture_output=True, text=True, check=True)  # fmt: skip
+    assert out.stdout.strip().splitlines()[-1] == "False"
