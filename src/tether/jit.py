@@ -51,6 +51,7 @@ KERNEL_MODULES = (
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",
     "sensing/robots_kernels.py",
+    "sensing/draws_kernels.py",
 )
 
 _forced: bool | None = None

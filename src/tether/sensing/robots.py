@@ -55,6 +55,14 @@ def _kernels() -> ModuleType:
     return robots_kernels
 
 
+@cache
+def _draws_kernels() -> ModuleType:
+    """:mod:`tether.sensing.draws_kernels`, imported on first use."""
+    from tether.sensing import draws_kernels
+
+    return draws_kernels
+
+
 def _use_kernel(n: int) -> bool:
     """Whether :func:`sense` runs :mod:`tether.sensing.robots_kernels` for ``n`` robots."""
     if n < 2 or not jit.enabled():
@@ -205,48 +213,27 @@ def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np
     return rotated * np.maximum(dist + e_r, 0.0)[:, None]
 
 
-#: ``rng.choice([-1.0, 1.0], size=k)`` is ``_SIGNS[rng.integers(0, 2, size=k)]``: the
-#: same draws (numpy's ``Generator.choice`` with replacement and no ``p`` draws
-#: ``integers(0, len(a), size)``; tests compare both paths bit for bit) without
-#: ``choice``'s argument checks
-_SIGNS = np.array([-1.0, 1.0])
-
-
-def _coin_flips(rng: np.random.Generator, k: int) -> np.ndarray:
-    """``rng.integers(0, 2, size=k)`` as ``k`` float32 draws: ``1`` where ``>= 0.5``.
-
-    Both consume one ``next_uint32`` of the bit generator per draw (its buffered half
-    words included): ``integers`` keeps the top bit (Lemire's method with a range of 2,
-    ``(u * 2) >> 32``, never rejects), ``random(dtype=float32)`` returns
-    ``(u >> 8) / 2^24``, which is ``>= 0.5`` exactly when that bit is set. The same
-    stream and the same values (tests: bit for bit), at a third of ``integers``' cost.
-    """
-    return rng.random(k, dtype=np.float32)
-
-
 def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
     """:func:`_noisy` with the arithmetic compiled: the same draws, in the same order.
 
+    The errors and the 2-D perpendicular's signs come from one compiled call that
+    draws them as the ``Generator`` calls of :func:`_noisy` would
+    (:mod:`tether.sensing.draws_kernels`), the 3-D normals from numpy after them;
     ``cos``/``sin`` of the angular errors stay numpy's (so the values are the same).
     """
     if sensor.noise == "none" or len(rel) == 0:
         return rel.copy()
     k, dim = rel.shape
-    if sensor.noise == "uniform":
-        e_r = rng.uniform(-sensor.radial_error_m, sensor.radial_error_m, size=k)
-        e_a = rng.uniform(-sensor.angular_error_rad, sensor.angular_error_rad, size=k)
-    else:
-        e_r = sensor.radial_error_m * _SIGNS[rng.integers(0, 2, size=k)]
-        e_a = sensor.angular_error_rad * _SIGNS[rng.integers(0, 2, size=k)]
-    if dim == 2:  # random_perpendicular's signs, as coin flips
-        flip, normal = _coin_flips(rng, k), _NO_NORMALS
-    else:
-        flip, normal = _NO_FLIPS, rng.normal(size=(k, dim))
+    draws = _draws_kernels()
+    e_r, e_a, flip = draws.sensor_errors_kernel(
+        k, draws.NOISE_CODES[sensor.noise], float(sensor.radial_error_m),
+        float(sensor.angular_error_rad), dim == 2, draws.bitgen_addresses(rng),
+    )  # fmt: skip
+    normal = _NO_NORMALS if dim == 2 else rng.normal(size=(k, dim))
     return _kernels().noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), flip, normal)
 
 
-_NO_NORMALS = np.empty((0, 2))  # placeholders of the draws a dimension does not use
-_NO_FLIPS = np.empty(0, dtype=np.float32)
+_NO_NORMALS = np.empty((0, 2))  # the 3-D draws' placeholder in 2-D
 
 
 def _directed(pairs: np.ndarray, positions: np.ndarray, n: int) -> tuple[np.ndarray, ...]:

@@ -202,11 +202,10 @@ def _unit_rows(v, i, out, j):  # noqa: ANN001, ANN202
 def noise_kernel(rel, e_r, cos_a, sin_a, flip, normal):  # noqa: ANN001, ANN201, PLR0913
     """``_noisy``'s measurements from its draws: ``flip`` (2-D) or ``normal`` (3-D).
 
-    2-D: the perpendicular is ``(-u_1, u_0) * sign``, ``sign = 1`` where ``flip >= 0.5``
-    and -1 elsewhere (``rng.choice([-1, 1])``'s draws: see
-    :func:`~tether.sensing.robots._coin_flips`); 3-D: ``normal`` minus its component
-    along ``u``, normalised (``u x e_x`` when that is below 1e-9), as
-    :func:`tether.geometry.random_perpendicular`.
+    2-D: the perpendicular is ``(-u_1, u_0) * sign``, ``sign = (-1, 1)[flip]``
+    (``rng.choice([-1, 1])``'s draws: see :mod:`tether.sensing.draws_kernels`); 3-D:
+    ``normal`` minus its component along ``u``, normalised (``u x e_x`` when that is
+    below 1e-9), as :func:`tether.geometry.random_perpendicular`.
     """
     k, dim = rel.shape
     out = np.empty((k, dim))
@@ -214,7 +213,7 @@ def noise_kernel(rel, e_r, cos_a, sin_a, flip, normal):  # noqa: ANN001, ANN201,
     for q in range(k):
         dist = _unit_rows(rel, q, w, 0)
         if dim == 2:
-            sign = 1.0 if flip[q] >= 0.5 else -1.0
+            sign = 1.0 if flip[q] else -1.0
             w[1, 0] = -w[0, 1] * sign
             w[1, 1] = w[0, 0] * sign
         else:
@@ -244,5 +243,5 @@ def warm_up() -> None:
         sense_pairs_kernel(pos, 3.0, 0.5)
         _, _, rel = directed_kernel(pairs, pos, 3)
         k = len(rel)
-        flips = np.ones(k, np.float32)
+        flips = np.ones(k, np.uint8)
         noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), flips, np.ones((k, dim)))
