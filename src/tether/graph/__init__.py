@@ -8,7 +8,8 @@ here is plain arrays and sparse matrices, so that 10,000-robot teams stay cheap.
   Laplacians, connected components, stretch;
 * :mod:`tether.graph.fiedler` -- lambda2 and the Fiedler vector, one public
   function with ``method=`` dispatch (dense, subset, sparse, warm);
-* :mod:`tether.graph.warm` -- the certified warm-started solver for large teams.
+* :mod:`tether.graph.warm` -- the certified warm-started solver for large teams,
+  on :mod:`tether.graph.links` (a Laplacian kept as its links).
 """
 
 from tether.graph.fiedler import DENSE_MAX_N, SUBSET_MAX_N, algebraic_connectivity, fiedler
@@ -23,11 +24,12 @@ from tether.graph.structure import (
     pairs_within,
     stretch,
 )
-from tether.graph.warm import warm_fiedler
+from tether.graph.warm import WarmState, warm_fiedler
 
 __all__ = [
     "DENSE_MAX_N",
     "SUBSET_MAX_N",
+    "WarmState",
     "adjacency",
     "algebraic_connectivity",
     "component_count",

@@ -17,7 +17,7 @@ import scipy.linalg.lapack
 from scipy.sparse.linalg import eigsh
 
 from tether.graph.structure import components, laplacian, laplacian_dense
-from tether.graph.warm import warm_fiedler
+from tether.graph.warm import WarmState, warm_fiedler
 
 Method = Literal["auto", "dense", "subset", "sparse", "warm"]
 
@@ -90,6 +90,7 @@ def fiedler(
     method: Method = "auto",
     guess: np.ndarray | None = None,
     laplacian: np.ndarray | None = None,
+    state: WarmState | None = None,
 ) -> tuple[float, np.ndarray]:
     """lambda2 and a unit Fiedler vector of a (weighted) graph.
 
@@ -116,6 +117,9 @@ def fiedler(
     laplacian
         ``laplacian_dense(n, pairs, weights)`` if the caller has it already (the
         dense solvers then skip building it; it must be exactly that matrix).
+    state
+        ``"warm"`` only: a :class:`tether.graph.warm.WarmState` that keeps the
+        solver's factorization from one call to the next (one per run).
 
     Returns
     -------
@@ -141,7 +145,7 @@ def fiedler(
             raise ValueError("method 'warm' needs a guess (a previous Fiedler vector)")
         # certified, so lambda2 > 0 (a connected graph) unless it is down at rounding level:
         # the components are checked after it, not before (they cost 10 % of a warm solve)
-        warm = warm_fiedler(n, pairs, w, guess)
+        warm = warm_fiedler(n, pairs, w, guess, state=state)
         if warm is None:
             method = "sparse"
     if method == "sparse":
