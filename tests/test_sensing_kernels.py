@@ -90,3 +90,36 @@ def test_large_team_and_obstacles_take_the_split_path_bit_identically(noise: str
             fast = sense(pos, sensor, np.random.default_rng(9), world)
         for name in ("pairs", "indptr", "target", "measured", "true_relative"):
             np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name), name)
+
+
+@pytest.mark.parametrize("bitgen", ["PCG64", "MT19937", "Philox", "SFC64"])
+def test_compiled_draws_are_the_generators(bitgen: str) -> None:
+    """The errors and coin flips drawn in compiled code are numpy's ``uniform`` and
+    ``choice([-1, 1])`` draws: the same values and the same stream afterwards, for odd
+    counts (a buffered half word of ``next_uint32``) and with numpy draws between."""
+    from tether.sensing.draws_kernels import NOISE_CODES, bitgen_addresses, sensor_errors_kernel
+
+    make = getattr(np.random, bitgen)
+    for seed in range(6):
+        a, b = np.random.Generator(make(seed)), np.random.Generator(make(seed))
+        for k in (0, 1, 2, 3, 7, 138, 241, 1):
+            for noise in ("uniform", "bound"):
+                for rng in (a, b):
+                    rng.uniform(-1.0, 1.0, seed % 3)  # doubles between the draws
+                e_r, e_a, flip = sensor_errors_kernel(
+                    k, NOISE_CODES[noise], 0.45, 0.2, k % 2 == 1, bitgen_addresses(a)
+                )
+                if noise == "uniform":
+                    ref_r, ref_a = b.uniform(-0.45, 0.45, size=k), b.uniform(-0.2, 0.2, size=k)
+                else:
+                    ref_r = 0.45 * b.choice([-1.0, 1.0], size=k)
+                    ref_a = 0.2 * b.choice([-1.0, 1.0], size=k)
+                np.testing.assert_array_equal(e_r, ref_r)
+                np.testing.assert_array_equal(e_a, ref_a)
+                ref_flip = b.choice([-1.0, 1.0], size=k) if k % 2 == 1 else np.empty(0)
+                np.testing.assert_array_equal(np.array([-1.0, 1.0])[flip], ref_flip)
+        assert a.integers(0, 2**62) == b.integers(0, 2**62)
+        assert a.random() == b.random()
+    none = sensor_errors_kernel(5, NOISE_CODES["none"], 0.45, 0.2, True, bitgen_addresses(a))
+    assert not any(x.any() for x in none)
+    assert a.random() == b.random()  # "none" draws nothing

@@ -81,3 +81,31 @@ def test_pruned_kernel_matches_reference_on_crowded_teams(seed: int) -> None:
             with jit.using(True):
                 fast = constrained_steps(desired, obs.measured, obs.observer(), **kw)
             np.testing.assert_allclose(fast, ref, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("dim", [2, 3])
+def test_team_steps_kernel_is_the_three_steps(seed: int, dim: int) -> None:
+    """One call (desired steps, the leader's step, constraints) gives the steps of the
+    three kernels called one by one, bit for bit, and the reference's to 1e-12."""
+    from tether.silent.steering import team_steps
+
+    rng, n, obs = _random_observation(seed, dim)
+    leader = int(rng.integers(0, n))
+    leader_step = rng.normal(size=dim) * 2.0
+    for search in (False, True):
+        for min_sep, max_step in ((0.0, np.inf), (1.0, 0.8)):
+            kw = dict(d_max_m=15.0, radial_error_m=0.45, angular_error_rad=np.radians(12),
+                      min_separation_m=min_sep, max_step_m=max_step,
+                      search_directions=search)  # fmt: skip
+            with jit.using(True):
+                fused = team_steps(obs.measured, obs.indptr, leader, leader_step,
+                                   gamma=0.3, d0_m=7.0, **kw)  # fmt: skip
+                desired = desired_steps(obs.measured, obs.observer(), n, gamma=0.3, d0_m=7.0)
+                desired[leader] = leader_step
+                chained = constrained_steps(desired, obs.measured, obs.observer(), **kw)
+            with jit.using(False):
+                ref = team_steps(obs.measured, obs.indptr, leader, leader_step,
+                                 gamma=0.3, d0_m=7.0, **kw)  # fmt: skip
+            np.testing.assert_array_equal(fused, chained)
+            np.testing.assert_allclose(fused, ref, rtol=1e-12, atol=1e-12)

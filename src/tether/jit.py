@@ -46,6 +46,8 @@ KERNEL_MODULES = (
     "paths/astar_kernels.py",
     "graph/kernels.py",
     "graph/grid_kernels.py",
+    "graph/spectrum_kernels.py",
+    "graph/metrics_kernels.py",
     "graph/link_kernels.py",
     "paths/geodesic_kernels.py",
     "recurrent/planning/steiner_kernels.py",
@@ -55,6 +57,7 @@ KERNEL_MODULES = (
     "silent/steering_kernels.py",
     "sensing/robots_kernels.py",
     "sensing/depth_kernels.py",
+    "sensing/draws_kernels.py",
 )
 
 _forced: bool | None = None

@@ -23,6 +23,8 @@ import os
 import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from functools import cache
+from types import ModuleType
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
@@ -31,6 +33,7 @@ from threadpoolctl import threadpool_limits
 
 from tether import jit
 from tether.graph import component_count, fiedler, pairs_within
+from tether.graph.structure import KERNEL_PAIRS_MAX_N
 from tether.sensing import Observation, SensorModel, sense
 from tether.world.world import World
 
@@ -224,8 +227,14 @@ def team_metrics(
 
     The graph has ``obs.n`` nodes: the robots, then any fixed nodes (a base
     station). Collisions count robot pairs closer than ``collision_distance_m``.
+    Small teams (up to :data:`~tether.graph.structure.KERNEL_PAIRS_MAX_N` nodes), once
+    numba is loaded (:func:`tether.jit.warm`), get all four numbers from one call of
+    :func:`tether.graph.metrics_kernels.team_metrics_kernel`: the same values, except
+    lambda2, which agrees with the reference's ``eigh`` to rounding (tests: 1e-12).
     """
     n = obs.n
+    if n <= KERNEL_PAIRS_MAX_N and jit.warm() and positions.ndim == 2:
+        return _team_metrics_compiled(step, t_s, positions, obs, collision_distance_m)
     n_comp, lam = _graph_metrics(n, obs.pairs)
     close = pairs_within(positions, collision_distance_m) if collision_distance_m > 0 else []
     if n > 1 and len(obs.pairs):
@@ -233,6 +242,34 @@ def team_metrics(
     else:
         d = float("inf")
     return StepRecord(step, t_s, n_comp <= 1, n_comp, len(obs.pairs), lam, float(d), len(close))
+
+
+@cache
+def _metrics_kernels() -> ModuleType:
+    """:mod:`tether.graph.metrics_kernels`, imported on first use (it loads numba)."""
+    from tether.graph import metrics_kernels
+
+    return metrics_kernels
+
+
+def _team_metrics_compiled(
+    step: int, t_s: float, positions: np.ndarray, obs: Observation, collision_distance_m: float
+) -> StepRecord:
+    """:func:`team_metrics` in one compiled call (the graph's part skipped on a cache hit)."""
+    n = obs.n
+    pairs = np.ascontiguousarray(obs.pairs, dtype=np.int64).reshape(-1, 2)
+    key = ("compiled", n, pairs.shape, pairs.tobytes())
+    hit = _GRAPH_CACHE["key"] == key
+    n_comp, lam, d, close = _metrics_kernels().team_metrics_kernel(
+        n, pairs, np.ascontiguousarray(positions, dtype=float),
+        np.ascontiguousarray(obs.true_relative, dtype=float), float(collision_distance_m),
+        not hit,
+    )  # fmt: skip
+    if hit:
+        n_comp, lam = _GRAPH_CACHE["value"]
+    else:
+        _GRAPH_CACHE["key"], _GRAPH_CACHE["value"] = key, (n_comp, lam)
+    return StepRecord(step, t_s, n_comp <= 1, n_comp, len(pairs), lam, d, close)
 
 
 #: the last graph's metrics: a team's sensing graph often stays the same for many steps

@@ -451,9 +451,15 @@ def warm_up() -> float:
     from tether.sensing.robots_kernels import warm_up as sensing_warm_up
 
     sensing_warm_up()
+    from tether.sensing.draws_kernels import warm_up as draws_warm_up
+
+    draws_warm_up()
     from tether.graph.grid_kernels import warm_up as grid_warm_up
 
     grid_warm_up()
+    from tether.graph.metrics_kernels import warm_up as metrics_warm_up
+
+    metrics_warm_up()
     from tether.paths.astar_kernels import warm_up as astar_warm_up
 
     astar_warm_up()

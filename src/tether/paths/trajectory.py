@@ -51,10 +51,13 @@ class Polyline:
         self._denom = [float(ab @ ab) for ab in seg]
         self._cum_list = self._cum.tolist()
         self._seg_len_list = self._seg_len.tolist()
+        self._length_m = float(self._cum[-1])
+        self._points = self.waypoints.tolist()  # as Python floats: at() adds them one by one
+        self._seg_rows = seg.tolist()
 
     @property
     def length_m(self) -> float:
-        return float(self._cum[-1])
+        return self._length_m
 
     @property
     def end(self) -> np.ndarray:
@@ -62,13 +65,15 @@ class Polyline:
 
     def at(self, s_m: float) -> np.ndarray:
         """Point at arc length ``s_m`` (clamped to the path)."""
-        s = _clip(s_m, 0.0, self.length_m)
-        if len(self.waypoints) == 1 or self.length_m == 0.0:
+        s = _clip(s_m, 0.0, self._length_m)
+        if len(self._points) == 1 or self._length_m == 0.0:
             return self.waypoints[0].copy()
         k = bisect.bisect_right(self._cum_list, s) - 1  # np.searchsorted(side="right")
         k = min(max(k, 0), len(self._seg_len_list) - 1)
         frac = (s - self._cum_list[k]) / max(self._seg_len_list[k], 1e-12)
-        return self.waypoints[k] + frac * self._seg[k]
+        # waypoints[k] + frac * seg[k], coordinate by coordinate (the same IEEE operations)
+        a, ab = self._points[k], self._seg_rows[k]
+        return np.array([a[c] + frac * ab[c] for c in range(len(a))])
 
     def project(self, point: np.ndarray, s_min: float = 0.0, window_m: float = np.inf) -> float:
         """Arc length of the path point closest to ``point`` in ``[s_min, s_min + window_m]``."""
@@ -79,7 +84,8 @@ class Polyline:
             if s1 < s_min or s0 > s_min + window_m:
                 continue
             a, ab, denom = self.waypoints[k], self._seg[k], self._denom[k]
-            t = 0.0 if denom == 0 else _clip((point - a) @ ab / denom, 0.0, 1.0)
+            # (point - a) @ ab: numpy computes a vector @ vector product by its dot
+            t = 0.0 if denom == 0 else _clip((point - a).dot(ab) / denom, 0.0, 1.0)
             s = _clip(s0 + t * (s1 - s0), s_min, s_min + window_m)
             gap = self.at(s) - point
             d = math.sqrt(gap.dot(gap))  # np.linalg.norm of a vector: sqrt(x.dot(x))

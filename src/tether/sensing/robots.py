@@ -24,6 +24,8 @@ bound with random sign (the worst case for the constraints).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
+from types import ModuleType
 from typing import Literal
 
 import numpy as np
@@ -40,6 +42,25 @@ NoiseKind = Literal["none", "uniform", "bound"]
 #: TETHER_JIT=on): loading numba (about a second) would cost a short small-team run more
 #: than the kernels save (as :data:`tether.silent.steering.KERNEL_MIN_ROBOTS`)
 KERNEL_MIN_ROBOTS = 200
+
+
+@cache
+def _kernels() -> ModuleType:
+    """:mod:`tether.sensing.robots_kernels`, imported on first use (it loads numba).
+
+    Cached: an import statement run every step costs microseconds.
+    """
+    from tether.sensing import robots_kernels
+
+    return robots_kernels
+
+
+@cache
+def _draws_kernels() -> ModuleType:
+    """:mod:`tether.sensing.draws_kernels`, imported on first use."""
+    from tether.sensing import draws_kernels
+
+    return draws_kernels
 
 
 def _use_kernel(n: int) -> bool:
@@ -166,9 +187,10 @@ def sensed_pairs(
         keep &= world.segments_clear(positions[pairs[:, 0]], positions[pairs[:, 1]])
     if sensor.occlusion and sensor.body_radius_m > 0:
         if _use_kernel(len(positions)):
-            from tether.sensing.robots_kernels import occluded_kernel
-
-            keep &= ~occluded_kernel(positions, pairs.astype(np.int64), float(sensor.body_radius_m))
+            hidden = _kernels().occluded_kernel(
+                positions, pairs.astype(np.int64), float(sensor.body_radius_m)
+            )
+            keep &= ~hidden
         else:
             keep &= ~_occluded(positions, pairs, sensor.body_radius_m)
     return pairs[keep]
@@ -191,34 +213,27 @@ def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np
     return rotated * np.maximum(dist + e_r, 0.0)[:, None]
 
 
-#: ``rng.choice([-1.0, 1.0], size=k)`` is ``_SIGNS[rng.integers(0, 2, size=k)]``: the
-#: same draws (numpy's ``Generator.choice`` with replacement and no ``p`` draws
-#: ``integers(0, len(a), size)``; tests compare both paths bit for bit) without
-#: ``choice``'s argument checks
-_SIGNS = np.array([-1.0, 1.0])
-
-
 def _noisy_compiled(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
     """:func:`_noisy` with the arithmetic compiled: the same draws, in the same order.
 
+    The errors and the 2-D perpendicular's signs come from one compiled call that
+    draws them as the ``Generator`` calls of :func:`_noisy` would
+    (:mod:`tether.sensing.draws_kernels`), the 3-D normals from numpy after them;
     ``cos``/``sin`` of the angular errors stay numpy's (so the values are the same).
     """
     if sensor.noise == "none" or len(rel) == 0:
         return rel.copy()
     k, dim = rel.shape
-    if sensor.noise == "uniform":
-        e_r = rng.uniform(-sensor.radial_error_m, sensor.radial_error_m, size=k)
-        e_a = rng.uniform(-sensor.angular_error_rad, sensor.angular_error_rad, size=k)
-    else:
-        e_r = sensor.radial_error_m * _SIGNS[rng.integers(0, 2, size=k)]
-        e_a = sensor.angular_error_rad * _SIGNS[rng.integers(0, 2, size=k)]
-    if dim == 2:  # random_perpendicular's draws
-        sign, normal = _SIGNS[rng.integers(0, 2, size=k)], np.empty((0, dim))
-    else:
-        sign, normal = np.empty(0), rng.normal(size=(k, dim))
-    from tether.sensing.robots_kernels import noise_kernel
+    draws = _draws_kernels()
+    e_r, e_a, flip = draws.sensor_errors_kernel(
+        k, draws.NOISE_CODES[sensor.noise], float(sensor.radial_error_m),
+        float(sensor.angular_error_rad), dim == 2, draws.bitgen_addresses(rng),
+    )  # fmt: skip
+    normal = _NO_NORMALS if dim == 2 else rng.normal(size=(k, dim))
+    return _kernels().noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), flip, normal)
 
-    return noise_kernel(rel, e_r, np.cos(e_a), np.sin(e_a), sign, normal)
+
+_NO_NORMALS = np.empty((0, 2))  # the 3-D draws' placeholder in 2-D
 
 
 def _directed(pairs: np.ndarray, positions: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
@@ -253,22 +268,26 @@ def sense(
     positions = np.ascontiguousarray(positions, dtype=float)
     n = len(positions)
     if _use_kernel(n) and positions.ndim == 2 and positions.shape[1] in (2, 3):
-        from tether.sensing import robots_kernels as kernels
-
+        kernels = _kernels()
         if n <= KERNEL_PAIRS_MAX_N and (world is None or not world.has_obstacles):
             radius = float(sensor.body_radius_m) if sensor.occlusion else 0.0
-            pairs, directed, indptr, rel = kernels.sense_pairs_kernel(
+            pairs, indptr, target, rel = kernels.sense_pairs_kernel(
                 positions, float(sensor.range_m), radius
             )
         else:
             pairs = sensed_pairs(positions, sensor, world)
-            directed, indptr, rel = kernels.directed_kernel(pairs.astype(np.int64), positions, n)
-        indptr = indptr.astype(np.intp)
+            indptr, target, rel = kernels.directed_kernel(pairs.astype(np.int64), positions, n)
         measured = _noisy_compiled(rel, sensor, rng)
-    else:
-        pairs = sensed_pairs(positions, sensor, world)
-        directed, indptr, rel = _directed(pairs, positions, n)
-        measured = _noisy(rel, sensor, rng)
+        return Observation(
+            pairs=pairs,
+            indptr=indptr.astype(np.intp, copy=False),
+            target=target.astype(np.intp, copy=False),
+            measured=measured,
+            true_relative=rel,
+        )
+    pairs = sensed_pairs(positions, sensor, world)
+    directed, indptr, rel = _directed(pairs, positions, n)
+    measured = _noisy(rel, sensor, rng)
     return Observation(
         pairs=pairs,
         indptr=indptr,

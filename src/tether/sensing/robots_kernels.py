@@ -9,7 +9,8 @@ Three kernels, each the arithmetic of its reference, term for term:
   coordinate order, over ``i``'s range-neighbours, robot by robot instead of numpy
   arrays of ``sum_i deg_i^2`` candidates;
 * :func:`directed_kernel` -- :func:`~tether.sensing.robots._directed`: both directions
-  of every pair sorted by (observer, target) with a counting sort and relatives;
+  of every pair sorted by (observer, target) with a counting sort (CSR row pointers and
+  targets) and relatives;
 * :func:`sense_pairs_kernel` -- for small teams in free space, the three steps before
   the noise in one call (range by :func:`~tether.graph.kernels.pairs_within_kernel`,
   occlusion, CSR): numba's dispatch costs microseconds per call and argument;
@@ -35,18 +36,19 @@ from tether.graph.kernels import pairs_within_kernel
 EPS = 1e-12  # tether.geometry.unit's default
 
 
-@njit(cache=True)
-def _einsum_dot(a, b):  # noqa: ANN001, ANN202
-    """``np.einsum("kd,kd->k")`` for one row, in its summation order.
+@njit(cache=True, inline="always")
+def _dot_rows(a, i, b, j):  # noqa: ANN001, ANN202
+    """``np.einsum("kd,kd->k")`` of rows ``a[i]`` and ``b[j]``, in its summation order.
 
     numpy's inner loop adds two lanes: ``a_0 b_0 + a_1 b_1`` in 2-D,
-    ``(a_0 b_0 + a_2 b_2) + a_1 b_1`` in 3-D (tests compare bit for bit).
+    ``(a_0 b_0 + a_2 b_2) + a_1 b_1`` in 3-D (tests compare bit for bit). Rows are
+    passed by index: a row view would cost a reference count per call.
     """
-    if len(a) == 3:
-        return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
+    if a.shape[1] == 3:
+        return (a[i, 0] * b[j, 0] + a[i, 2] * b[j, 2]) + a[i, 1] * b[j, 1]
     s = 0.0
-    for c in range(len(a)):
-        s += a[c] * b[c]
+    for c in range(a.shape[1]):
+        s += a[i, c] * b[j, c]
     return s
 
 
@@ -85,14 +87,13 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
         return out
     indptr, nbr = _neighbours(n, pairs)
     d2 = np.empty(len(nbr))
-    ik = np.empty(dim)
-    ij = np.empty(dim)
+    w = np.empty((2, dim))  # rows: i -> j, i -> k
     for i in range(n):
         lo, hi = indptr[i], indptr[i + 1]
         for e in range(lo, hi):
             for c in range(dim):
-                ij[c] = positions[nbr[e], c] - positions[i, c]
-            d2[e] = _einsum_dot(ij, ij)
+                w[0, c] = positions[nbr[e], c] - positions[i, c]
+            d2[e] = _dot_rows(w, 0, w, 0)
         for e in range(lo + 1, hi):  # insertion sort by squared distance
             j, dj = nbr[e], d2[e]
             f = e
@@ -104,8 +105,8 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
     for p in range(m):
         i, k = pairs[p, 0], pairs[p, 1]
         for c in range(dim):
-            ik[c] = positions[k, c] - positions[i, c]
-        d2_ik = _einsum_dot(ik, ik)
+            w[1, c] = positions[k, c] - positions[i, c]
+        d2_ik = _dot_rows(w, 1, w, 1)
         for e in range(indptr[i], indptr[i + 1]):
             d2_ij = d2[e]
             if not d2_ij < d2_ik:
@@ -114,8 +115,8 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
             if j == k:
                 continue
             for c in range(dim):
-                ij[c] = positions[j, c] - positions[i, c]
-            proj = _einsum_dot(ij, ik)
+                w[0, c] = positions[j, c] - positions[i, c]
+            proj = _dot_rows(w, 0, w, 1)
             d2_kj = d2_ik - 2.0 * proj + d2_ij
             perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
             if d2_kj < d2_ik and perp2 < r2:
@@ -126,7 +127,11 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
 
 @njit(cache=True)
 def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
-    """``_directed``: directed pairs sorted by (observer, target), CSR indptr, relatives."""
+    """``_directed`` by a counting sort: CSR indptr, targets (by observer, then target), relatives.
+
+    The directed pair of entry ``e`` is ``(observer, target[e])``, the observer being the
+    row of ``indptr`` that holds ``e``.
+    """
     m = len(pairs)
     dim = positions.shape[1]
     indptr = np.zeros(n + 1, np.int64)
@@ -143,7 +148,6 @@ def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
         fill[a] += 1
         target[fill[b]] = a
         fill[b] += 1
-    directed = np.empty((2 * m, 2), np.int64)
     rel = np.empty((2 * m, dim))
     for v in range(n):
         lo, hi = indptr[v], indptr[v + 1]
@@ -155,18 +159,16 @@ def directed_kernel(pairs, positions, n):  # noqa: ANN001, ANN201
                 f -= 1
             target[f] = t
         for e in range(lo, hi):
-            directed[e, 0] = v
-            directed[e, 1] = target[e]
             for c in range(dim):
                 rel[e, c] = positions[target[e], c] - positions[v, c]
-    return directed, indptr, rel
+    return indptr, target, rel
 
 
 @njit(cache=True)
 def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN201
     """Sensed pairs (no obstacles; occlusion if ``body_radius_m > 0``), then ``_directed``.
 
-    Returns ``(pairs, directed, indptr, rel)`` as :func:`~tether.sensing.robots.sense`
+    Returns ``(pairs, indptr, target, rel)`` as :func:`~tether.sensing.robots.sense`
     builds them; all pairs are tested (teams of up to a few hundred robots).
     """
     n = positions.shape[0]
@@ -179,55 +181,56 @@ def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN2
                 pairs[keep, 0], pairs[keep, 1] = pairs[p, 0], pairs[p, 1]
                 keep += 1
         pairs = pairs[:keep].copy()
-    directed, indptr, rel = directed_kernel(pairs, positions, n)
-    return pairs, directed, indptr, rel
+    indptr, target, rel = directed_kernel(pairs, positions, n)
+    return pairs, indptr, target, rel
 
 
-@njit(cache=True)
-def _unit_row(v, out):  # noqa: ANN001, ANN202
-    """``out = unit(v)`` as :func:`tether.geometry.unit`; returns ``||v||``."""
+@njit(cache=True, inline="always")
+def _unit_rows(v, i, out, j):  # noqa: ANN001, ANN202
+    """``out[j] = unit(v[i])`` as :func:`tether.geometry.unit`; returns ``||v[i]||``."""
+    dim = v.shape[1]
     s = 0.0
-    for c in range(len(v)):
-        s += v[c] * v[c]
+    for c in range(dim):
+        s += v[i, c] * v[i, c]
     norm = math.sqrt(s)
-    for c in range(len(v)):
-        out[c] = v[c] / max(norm, EPS) if norm > EPS else 0.0
+    for c in range(dim):
+        out[j, c] = v[i, c] / max(norm, EPS) if norm > EPS else 0.0
     return norm
 
 
 @njit(cache=True)
-def noise_kernel(rel, e_r, cos_a, sin_a, sign, normal):  # noqa: ANN001, ANN201, PLR0913
-    """``_noisy``'s measurements from its draws: ``sign`` (2-D) or ``normal`` (3-D).
+def noise_kernel(rel, e_r, cos_a, sin_a, flip, normal):  # noqa: ANN001, ANN201, PLR0913
+    """``_noisy``'s measurements from its draws: ``flip`` (2-D) or ``normal`` (3-D).
 
-    2-D: the perpendicular is ``(-u_1, u_0) * sign``; 3-D: ``normal`` minus its
-    component along ``u``, normalised (``u x e_x`` when that is below 1e-9), as
-    :func:`tether.geometry.random_perpendicular`.
+    2-D: the perpendicular is ``(-u_1, u_0) * sign``, ``sign = (-1, 1)[flip]``
+    (``rng.choice([-1, 1])``'s draws: see :mod:`tether.sensing.draws_kernels`); 3-D:
+    ``normal`` minus its component along ``u``, normalised (``u x e_x`` when that is
+    below 1e-9), as :func:`tether.geometry.random_perpendicular`.
     """
     k, dim = rel.shape
     out = np.empty((k, dim))
-    u = np.empty(dim)
-    perp = np.empty(dim)
-    r = np.empty(dim)
+    w = np.empty((3, dim))  # rows: u, the perpendicular, its raw direction
     for q in range(k):
-        dist = _unit_row(rel[q], u)
+        dist = _unit_rows(rel, q, w, 0)
         if dim == 2:
-            perp[0] = -u[1] * sign[q]
-            perp[1] = u[0] * sign[q]
+            sign = 1.0 if flip[q] else -1.0
+            w[1, 0] = -w[0, 1] * sign
+            w[1, 1] = w[0, 0] * sign
         else:
-            dot = _einsum_dot(normal[q], u)
+            dot = _dot_rows(normal, q, w, 0)
             for c in range(dim):
-                r[c] = normal[q, c] - dot * u[c]
+                w[2, c] = normal[q, c] - dot * w[0, c]
             s = 0.0
             for c in range(dim):
-                s += r[c] * r[c]
+                s += w[2, c] * w[2, c]
             if math.sqrt(s) < 1e-9:  # np.cross(u, (1, 0, 0))
-                r[0] = u[1] * 0.0 - u[2] * 0.0
-                r[1] = u[2] * 1.0 - u[0] * 0.0
-                r[2] = u[0] * 0.0 - u[1] * 1.0
-            _unit_row(r, perp)
+                w[2, 0] = w[0, 1] * 0.0 - w[0, 2] * 0.0
+                w[2, 1] = w[0, 2] * 1.0 - w[0, 0] * 0.0
+                w[2, 2] = w[0, 0] * 0.0 - w[0, 1] * 1.0
+            _unit_rows(w, 2, w, 1)
         scale = max(dist + e_r[q], 0.0)
         for c in range(dim):
-            out[q, c] = (cos_a[q] * u[c] + sin_a[q] * perp[c]) * scale
+            out[q, c] = (cos_a[q] * w[0, c] + sin_a[q] * w[1, c]) * scale
     return out
 
 
@@ -240,4 +243,5 @@ def warm_up() -> None:
         sense_pairs_kernel(pos, 3.0, 0.5)
         _, _, rel = directed_kernel(pairs, pos, 3)
         k = len(rel)
-        noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), np.ones(k), np.ones((k, dim)))
+        flips = np.ones(k, np.uint8)
+        noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), flips, np.ones((k, dim)))

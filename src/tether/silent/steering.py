@@ -33,6 +33,8 @@ All functions work on a whole team at once: measurements are given CSR-style
 
 from __future__ import annotations
 
+from functools import cache
+from types import ModuleType
 from typing import Literal
 
 import numpy as np
@@ -75,9 +77,7 @@ def desired_steps(
     adds the same terms in the same order (bit-identical).
     """
     if cost == "desired_distance" and _use_kernel(n) and measured.ndim == 2:
-        from tether.silent.steering_kernels import desired_distance_kernel
-
-        return desired_distance_kernel(
+        return _kernels().desired_distance_kernel(
             np.ascontiguousarray(measured, dtype=float),
             np.asarray(observer, dtype=np.int64), int(n), float(gamma), float(d0_m),
         )  # fmt: skip
@@ -164,6 +164,14 @@ def _pair_bounds(
 KERNEL_MIN_ROBOTS = 200
 
 
+@cache
+def _kernels() -> ModuleType:
+    """:mod:`tether.silent.steering_kernels`, imported on first use (it loads numba)."""
+    from tether.silent import steering_kernels
+
+    return steering_kernels
+
+
 def _use_kernel(n: int) -> bool:
     """Whether :func:`constrained_steps` runs the compiled kernel for ``n`` robots."""
     if n == 0 or not jit.enabled():
@@ -207,9 +215,7 @@ def constrained_steps(
     if indptr is None:
         indptr = np.concatenate([[0], np.cumsum(np.bincount(observer, minlength=n))])
     if _use_kernel(n) and (grouped or len(observer) < 2 or (np.diff(observer) >= 0).all()):
-        from tether.silent.steering_kernels import constrained_steps_kernel
-
-        return constrained_steps_kernel(
+        return _kernels().constrained_steps_kernel(
             np.ascontiguousarray(desired, dtype=float),
             np.ascontiguousarray(measured, dtype=float).reshape(-1, desired.shape[1]),
             indptr.astype(np.int64), float(d_max_m), float(radial_error_m),
@@ -245,6 +251,49 @@ def constrained_steps(
     steps = cand[best] * allowed[best][:, None]
     steps[progress[best] <= 0.0] = 0.0
     return steps
+
+
+def team_steps(
+    measured: np.ndarray,
+    indptr: np.ndarray,
+    leader: int,
+    leader_step: np.ndarray,
+    *,
+    cost: Cost = "desired_distance",
+    gamma: float = 0.2,
+    d0_m: float = 8.0,
+    d_max_m: float,
+    radial_error_m: float = 0.0,
+    angular_error_rad: float = 0.0,
+    min_separation_m: float = 0.0,
+    max_step_m: float = np.inf,
+    search_directions: bool = False,
+) -> np.ndarray:
+    """One step of the Local Steering Strategy for a team led by robot ``leader``.
+
+    The followers' desired steps (:func:`desired_steps`), the leader's replaced by
+    ``leader_step`` (its step towards its trajectory), then :func:`constrained_steps`
+    for everybody (the paper's section IV: the leader obeys (1)-(2) too). Measurements
+    are an :class:`~tether.sensing.Observation`'s CSR rows (``indptr``, one row per
+    robot). For cost (13), with the compiled kernels (:func:`_use_kernel`), one call
+    of :func:`tether.silent.steering_kernels.team_steps_kernel` gives the same steps,
+    bit for bit, as the kernels of the three steps.
+    """
+    n = len(indptr) - 1
+    if cost == "desired_distance" and _use_kernel(n) and measured.ndim == 2:
+        return _kernels().team_steps_kernel(
+            np.ascontiguousarray(measured, dtype=float), indptr.astype(np.int64, copy=False),
+            int(leader), np.asarray(leader_step, dtype=float), float(gamma), float(d0_m),
+            float(d_max_m), float(radial_error_m), float(angular_error_rad),
+            float(min_separation_m), float(max_step_m), bool(search_directions),
+        )  # fmt: skip
+    observer = np.repeat(np.arange(n), np.diff(indptr))
+    desired = desired_steps(measured, observer, n, cost=cost, gamma=gamma, d0_m=d0_m)
+    desired[leader] = leader_step
+    return constrained_steps(desired, measured, observer, d_max_m=d_max_m,
+                             radial_error_m=radial_error_m, angular_error_rad=angular_error_rad,
+                             min_separation_m=min_separation_m, max_step_m=max_step_m,
+                             search_directions=search_directions, indptr=indptr)  # fmt: skip
 
 
 def satisfies_constraints(

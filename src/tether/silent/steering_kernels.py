@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-from tether.sensing.robots_kernels import _einsum_dot, _unit_row
+from tether.sensing.robots_kernels import _dot_rows, _unit_rows
 
 #: margin on ``cos(phi)`` beyond which a branch of :func:`_bound` is taken without
 #: ``acos`` (an angle error of at least 1e-9 rad, far above ``acos``'s rounding)
@@ -45,8 +45,8 @@ def _bound_exact(cos_phi, dist, d_m, r_err, ang, min_sep):  # noqa: ANN001, ANN2
     return max(bound, 0.0)
 
 
-@njit(cache=True)
-def _bound(u, mu, dist, d_m, r_err, ang, min_sep, sin_ang, cos_ang, b):  # noqa: ANN001, ANN202, PLR0913
+@njit(cache=True, inline="always")
+def _bound(cos_phi, dist, d_m, r_err, ang, min_sep, sin_ang, cos_ang, b):  # noqa: ANN001, ANN202, PLR0913
     """:func:`_bound_exact`, or ``inf`` when the pair's bound is surely ``>= b``.
 
     ``min(b, _bound(...))`` is exactly ``min(b, _bound_exact(...))``: where ``cos(phi)``
@@ -56,7 +56,6 @@ def _bound(u, mu, dist, d_m, r_err, ang, min_sep, sin_ang, cos_ang, b):  # noqa:
     constraint (2) is skipped when a lower bound of ``cos(phi + ang)`` (by the angle-sum
     formula, less :data:`MARGIN`) already puts it at or above ``b``.
     """
-    cos_phi = _einsum_dot(u, mu)
     c = min(max(cos_phi, -1.0), 1.0)
     if min_sep > 0:
         if c > -sin_ang + MARGIN:
@@ -92,17 +91,17 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
     dist = np.empty(m)
     mu = np.empty((m, dim))
     for k in range(m):
-        dist[k] = _unit_row(measured[k], mu[k])
+        dist[k] = _unit_rows(measured, k, mu, k)
     steps = np.zeros((n, dim))
-    ud = np.empty(dim)
+    ud = np.empty((1, dim))  # the desired direction (rows are passed by index, not as views)
     for i in range(n):
-        length = _unit_row(desired[i], ud)
+        length = _unit_rows(desired, i, ud, 0)
         lo, hi = indptr[i], indptr[i + 1]
         best_k, best_allowed, best_progress = -1, 0.0, -np.inf
         last = hi if search else lo
         for cand in range(lo - 1, last):  # lo - 1: the desired direction, then each robot
-            u = ud if cand < lo else mu[cand]
-            dot = _einsum_dot(u, ud)
+            u, iu = (ud, 0) if cand < lo else (mu, cand)
+            dot = _dot_rows(u, iu, ud, 0)
             # pruning (search only): progress = allowed * dot with allowed >= 0 only
             # shrinking over k, so a candidate that cannot beat the best is skipped
             # exactly (ties keep the earlier one anyway); best_progress >= 0 after the
@@ -115,7 +114,8 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
                 continue
             b = np.inf
             for k in range(lo, hi):
-                b = min(b, _bound(u, mu[k], dist[k], d_m, r_err, ang, min_sep, sin_ang, cos_ang, b))
+                cos_phi = _dot_rows(u, iu, mu, k)
+                b = min(b, _bound(cos_phi, dist[k], d_m, r_err, ang, min_sep, sin_ang, cos_ang, b))
                 if (
                     search
                     and best_progress >= 0.0
@@ -125,15 +125,15 @@ def constrained_steps_kernel(  # noqa: ANN201, PLR0913
             allowed = min(min(length, b), max_step)
             if not search:
                 for c in range(dim):
-                    steps[i, c] = u[c] * allowed
+                    steps[i, c] = u[iu, c] * allowed
                 break
             progress = allowed * dot
             if progress > best_progress:  # ties keep the earlier candidate
                 best_k, best_allowed, best_progress = cand, allowed, progress
         if search and best_progress > 0.0:
-            u = ud if best_k < lo else mu[best_k]
+            u, iu = (ud, 0) if best_k < lo else (mu, best_k)
             for c in range(dim):
-                steps[i, c] = u[c] * best_allowed
+                steps[i, c] = u[iu, c] * best_allowed
     return steps
 
 
@@ -146,15 +146,45 @@ def desired_distance_kernel(measured, observer, n, gamma, d0_m):  # noqa: ANN001
     """
     m, dim = measured.shape
     out = np.zeros((n, dim))
-    u = np.empty(dim)
+    u = np.empty((1, dim))
     scale = 2.0 * gamma
     for q in range(m):
-        dist = _unit_row(measured[q], u)
+        dist = _unit_rows(measured, q, u, 0)
         f = scale * (dist - d0_m)
         o = observer[q]
         for c in range(dim):
-            out[o, c] += f * u[c]
+            out[o, c] += f * u[0, c]
     return out
+
+
+@njit(cache=True)
+def team_steps_kernel(  # noqa: ANN201, PLR0913
+    measured, indptr, leader, leader_step, gamma, d0_m, d_max, r_err, ang, min_sep, max_step,
+    search,
+):  # noqa: ANN001  # fmt: skip
+    """:func:`~tether.silent.steering.team_steps` for cost (13) in one call.
+
+    The desired steps (15) summed per robot over its CSR row (the terms in measurement
+    order, as :func:`desired_distance_kernel` and ``np.add.at`` add them), the leader's
+    replaced by ``leader_step``, then :func:`constrained_steps_kernel`: the same values,
+    bit for bit, as the three steps called one by one.
+    """
+    n = len(indptr) - 1
+    dim = measured.shape[1]
+    desired = np.zeros((n, dim))
+    u = np.empty((1, dim))
+    scale = 2.0 * gamma
+    for i in range(n):
+        for q in range(indptr[i], indptr[i + 1]):
+            dist = _unit_rows(measured, q, u, 0)
+            f = scale * (dist - d0_m)
+            for c in range(dim):
+                desired[i, c] += f * u[0, c]
+    for c in range(dim):
+        desired[leader, c] = leader_step[c]
+    return constrained_steps_kernel(
+        desired, measured, indptr, d_max, r_err, ang, min_sep, max_step, search
+    )
 
 
 def warm_up() -> None:
@@ -166,3 +196,6 @@ def warm_up() -> None:
         for search in (False, True):
             constrained_steps_kernel(desired, measured, indptr, 15.0, 0.4, 0.2, 0.5, np.inf, search)
         desired_distance_kernel(measured, indptr[:-1].copy(), 2, 0.2, 8.0)
+        for search in (False, True):
+            team_steps_kernel(measured, indptr, 0, desired[0], 0.2, 8.0, 15.0, 0.4, 0.2, 0.5,
+                              np.inf, search)  # fmt: skip

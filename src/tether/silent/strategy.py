@@ -19,7 +19,7 @@ from tether.config import MAX_LENGTH_M, Coordinate, Scenario, finite_strict
 from tether.errors import ScenarioError
 from tether.paths.trajectory import Polyline, TimeFunction
 from tether.registry import STRATEGIES
-from tether.silent.steering import constrained_steps, desired_steps
+from tether.silent.steering import team_steps
 from tether.sim import StepContext, Strategy, TeamState
 from tether.viz.plots import team_snapshot
 from tether.world.world import World
@@ -262,29 +262,27 @@ class SilentStrategy(Strategy):
     def step(self, ctx: StepContext) -> TeamState:
         self._step = ctx.step
         obs, state = ctx.obs, ctx.state
-        n = state.n
-        observer = obs.observer()
-        desired = desired_steps(
-            obs.measured, observer, n, cost=self.cost, gamma=self.gamma, d0_m=self.d0_m
-        )
         leader = self.leader
         target = self.leader_target(state.positions[leader], ctx.t_s + ctx.dt_s, ctx.dt_s)
-        desired[leader] = target - state.positions[leader]
+        leader_step = target - state.positions[leader]
         max_step = np.inf if self.max_speed_mps is None else self.max_speed_mps * ctx.dt_s
-        steps = constrained_steps(
-            desired,
+        steps = team_steps(
             obs.measured,
-            observer,
+            obs.indptr,
+            leader,
+            leader_step,
+            cost=self.cost,
+            gamma=self.gamma,
+            d0_m=self.d0_m,
             d_max_m=self.d_max_m,
             radial_error_m=self.radial_error_m,
             angular_error_rad=self.angular_error_rad,
             min_separation_m=self.min_separation_m,
             max_step_m=max_step,
             search_directions=self.search_directions,
-            indptr=obs.indptr,
         )
         steps = self._avoid_obstacles(state.positions, steps)
-        wanted = _norm(desired[leader])
+        wanted = _norm(leader_step)
         moved = _norm(steps[leader])
         if wanted > 1e-9 and moved < 0.05 * wanted:
             self._blocked_steps += 1

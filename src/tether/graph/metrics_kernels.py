@@ -1,0 +1,76 @@
+"""A small team's per-step graph metrics in one compiled call (numba).
+
+:func:`tether.sim.team_metrics` records, every step, the components and lambda2 of the
+true interaction graph, its shortest link and the robot pairs closer than the collision
+distance. For a team of tens of robots each of these is a handful of numpy and scipy
+calls whose overhead exceeds the arithmetic; :func:`team_metrics_kernel` computes all
+four at once:
+
+* components by union-find (:func:`~tether.graph.kernels.component_count_kernel`);
+* lambda2 by :func:`~tether.graph.spectrum_kernels.lambda2_kernel` (Householder and
+  bisection: the reference's ``eigh`` value to rounding), exactly 0 when disconnected;
+* the shortest link: ``sqrt`` of the smallest squared length of ``true_relative``'s
+  rows summed in coordinate order, as ``numpy.linalg.norm(axis=1)`` sums them (so the
+  same bits: ``sqrt`` is monotone and correctly rounded);
+* close pairs: all pairs tested as :func:`~tether.graph.kernels.pairs_within_kernel`
+  tests them, counted without storing them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from tether.graph.kernels import component_count_kernel
+from tether.graph.spectrum_kernels import lambda2_kernel
+
+
+@njit(cache=True)
+def team_metrics_kernel(n, pairs, positions, true_relative, collision_m, graph):  # noqa: ANN001, ANN201, PLR0913
+    """``(components, lambda2, shortest link, close pairs)`` of one step.
+
+    ``n`` graph nodes with ``(m, 2)`` int64 ``pairs``; ``positions`` the robots
+    (``(n_robots, dim)``), ``true_relative`` the observation's ``(2m, dim)`` relative
+    positions. ``graph=False`` skips components and lambda2 (returned as -1 and NaN: the
+    caller has them). The shortest link is ``inf`` without links or with one node; close
+    pairs are counted only for ``collision_m > 0``.
+    """
+    n_comp, lam = -1, np.nan
+    if graph:
+        n_comp = component_count_kernel(n, pairs) if n > 0 else 0
+        lam = 0.0 if n_comp > 1 else lambda2_kernel(n, pairs)
+    shortest = np.inf
+    if n > 1 and len(pairs) > 0:
+        dim = true_relative.shape[1]
+        low = np.inf
+        for q in range(len(true_relative)):
+            s = true_relative[q, 0] * true_relative[q, 0]
+            for c in range(1, dim):
+                s += true_relative[q, c] * true_relative[q, c]
+            low = min(low, s)
+        shortest = math.sqrt(low)
+    close = 0
+    if collision_m > 0:
+        r2 = collision_m * collision_m
+        n_robots, dim = positions.shape
+        for i in range(n_robots):
+            for j in range(i + 1, n_robots):
+                sq = 0.0
+                for c in range(dim):
+                    x = positions[i, c] - positions[j, c]
+                    sq += x * x
+                if sq <= r2:
+                    close += 1
+    return n_comp, lam, shortest, close
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the kernel for 2-D and 3-D teams."""
+    pairs = np.array([[0, 1], [1, 2]], np.int64)
+    for dim in (2, 3):
+        pos = np.eye(3, dim)
+        rel = np.ones((4, dim))
+        for graph in (False, True):
+            team_metrics_kernel(3, pairs, pos, rel, 1.0, graph)
