@@ -1,16 +1,10 @@
-"""Certified warm-started Fiedler pair of a small dense Laplacian (numba; imported lazily).
+"""Compiled kernel of :mod:`tether.graph.small` (numba; imported only when kernels run).
 
-For teams up to a few hundred robots the Laplacian is a small dense matrix; between two
-integrator sub-steps its Fiedler vector hardly moves. :func:`small_fiedler_kernel` runs
-shifted inverse iteration from the previous vector with one ``L D L'`` factorization of
-``L - tau I`` (no pivoting, ``O(n^3 / 3)``) and certifies the answer by Sylvester's law of
-inertia (Parlett, *The Symmetric Eigenvalue Problem*, 1998, Sec. 3.3 and 4.6) and
-Temple's inequality (ibid., Sec. 10.5), as the sparse solver of
-:mod:`tether.graph.warm` does; rounding is accounted for by the backward error of the
-factorization (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
-Thm. 9.3: ``L D L' = A + E`` with ``|E| <= gamma_n |L| |D| |L'|``). Used by
-:func:`tether.graph.fiedler.fiedler` with ``method="small"``; when the certificate
-fails the caller falls back to LAPACK ``dsyevr``.
+:func:`small_fiedler_kernel` is :func:`tether.graph.small.small_fiedler` with every
+operation in the same order: elementwise updates as numpy's, and every sum in numpy's
+pairwise order (:func:`tether.graph.kernels.pairwise_sum`), so both give the same bits
+(``tests/test_small_fiedler.py``). Inner loops run over unsigned offsets or slices so
+that they vectorise.
 """
 
 from __future__ import annotations
@@ -20,25 +14,116 @@ import math
 import numpy as np
 from numba import njit, uint64
 
-#: status codes of :func:`small_fiedler_kernel` (0: certified)
-OK, BAD_GUESS, TINY, BREAKDOWN, INERTIA, NO_CONVERGENCE = 0, 1, 2, 3, 4, 5
+from tether.graph.small import (
+    BAD_GUESS,
+    BREAKDOWN,
+    INERTIA,
+    MAX_FACTORIZATIONS,
+    MAX_N,
+    MAX_SOLVES,
+    NO_CONVERGENCE,
+    OK,
+    SHIFT_REL,
+    TINY,
+    TINY_REL,
+    TOL_REL,
+    UNIT_ROUNDOFF,
+    VEC_TOL,
+)
 
 
-@njit(cache=True)
-def _matvec(lap, x, out):  # noqa: ANN001, ANN202
-    """``out = lap @ x`` for a symmetric ``lap``, as a sum of its rows (vectorised axpys)."""
-    n = len(x)
-    out[:] = 0.0
-    for j in range(n):
-        row = lap[j]
-        xj = x[j]
+@njit(cache=True, inline="always")
+def _block(a, lo, n):  # noqa: ANN001, ANN202
+    """numpy's pairwise sum of ``a[lo:lo + n]`` for ``n <= 128``: eight running sums."""
+    if n < 8:
+        res = 0.0
         for i in range(n):
-            out[i] += xj * row[i]
+            res += a[lo + i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - (n % 8):
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
 
 
 @njit(cache=True)
-def _ldlt(lap, tau, f, d):  # noqa: ANN001, ANN202
-    """``L D L'`` of ``lap - tau I`` without pivoting: ``L`` below ``f``'s diagonal, ``L'`` above.
+def pairwise_sum(a, lo, n):  # noqa: ANN001, ANN201
+    """``numpy.add.reduce(a[lo:lo + n])`` (contiguous) in numpy's order, without recursion.
+
+    numpy halves a run longer than 128 (the first half rounded down to a multiple of 8)
+    and adds the two halves' sums; here the halving is unrolled three levels deep, which
+    is exact for ``n <= MAX_N`` (969 and beyond need a fourth;
+    :func:`tether.graph.kernels.pairwise_sum` is the recursive form, but numba cannot
+    load a recursive function compiled into another module from its cache).
+    """
+    if n <= 128:
+        return _block(a, lo, n)
+    h = n // 2
+    h -= h % 8
+    halves = 0.0
+    for side in range(2):
+        lo1, n1 = (lo, h) if side == 0 else (lo + h, n - h)
+        if n1 <= 128:
+            part = _block(a, lo1, n1)
+        else:
+            h1 = n1 // 2
+            h1 -= h1 % 8
+            part = 0.0
+            for side1 in range(2):
+                lo2, n2 = (lo1, h1) if side1 == 0 else (lo1 + h1, n1 - h1)
+                if n2 <= 128:
+                    q = _block(a, lo2, n2)
+                else:
+                    h2 = n2 // 2
+                    h2 -= h2 % 8
+                    q = _block(a, lo2, h2) + _block(a, lo2 + h2, n2 - h2)
+                part = q if side1 == 0 else part + q
+        halves = part if side == 0 else halves + part
+    return halves
+
+
+@njit(cache=True)
+def _sum(a):  # noqa: ANN001, ANN202
+    """``numpy.add.reduce(a)`` of a contiguous vector, in numpy's (pairwise) order."""
+    return pairwise_sum(a, 0, len(a))
+
+
+@njit(cache=True)
+def _rayleigh(lap, x, lx, tmp):  # noqa: ANN001, ANN202
+    """``lx = lap @ x`` (``(lap * x).sum(axis=1)``), the Rayleigh quotient ``theta = x' L x``
+    of a unit ``x`` and the residual's squared norm ``||L x - theta x||^2``."""
+    n = len(x)
+    for i in range(n):
+        row = lap[i]
+        for j in range(n):
+            tmp[j] = row[j] * x[j]
+        lx[i] = _sum(tmp)
+    for i in range(n):
+        tmp[i] = x[i] * lx[i]
+    theta = _sum(tmp)
+    for i in range(n):
+        e = lx[i] - theta * x[i]
+        tmp[i] = e * e
+    return theta, _sum(tmp)
+
+
+@njit(cache=True)
+def _ldlt(lap, tau, f, d, tmp):  # noqa: ANN001, ANN202
+    """``L D L'`` of ``lap - tau I`` without pivoting: ``L'`` above ``f``'s diagonal, ``L`` below.
 
     Returns ``(negative pivots, eta)`` with ``eta >= ||E||_2`` for the backward error
     ``E = L D L' - (lap - tau I)`` of the computed factors (Higham's
@@ -60,22 +145,21 @@ def _ldlt(lap, tau, f, d):  # noqa: ANN001, ANN202
         if dk < 0.0:
             negative += 1
         inv = 1.0 / dk
+        m = n - 1 - k
         for i in range(k + 1, n):  # Schur complement, upper triangle, row by row
             t = f[k, i] * inv
-            if t != 0.0:
-                a, b = uint64(i * n + i), uint64(k * n + i)
-                for j in range(uint64(n - i)):
-                    flat[a + j] -= t * flat[b + j]
-        col = 1.0
+            a, b = uint64(i * n + i), uint64(k * n + i)
+            for j in range(uint64(n - i)):
+                flat[a + j] -= t * flat[b + j]
         for i in range(k + 1, n):
             lik = f[k, i] * inv
             f[k, i] = lik
             f[i, k] = lik
-            col += lik * lik
-        bound += abs(dk) * col
+            tmp[i - k - 1] = lik * lik
+        bound += abs(dk) * (1.0 + pairwise_sum(tmp, 0, m))
     if not math.isfinite(bound):
         return -1, np.inf
-    u = 2.0**-53
+    u = UNIT_ROUNDOFF
     gamma = 2.0 * (n + 1) * u / (1.0 - (n + 1) * u)
     return negative, gamma * bound
 
@@ -86,54 +170,33 @@ def _solve(f, d, x):  # noqa: ANN001, ANN202
     n = len(d)
     for k in range(n - 1):  # L z = x: column k of L is row k of L'
         xk = x[k]
-        if xk != 0.0:
-            a = x[k + 1 :]
-            b = f[k, k + 1 :]
-            for i in range(n - 1 - k):
-                a[i] -= b[i] * xk
+        a = x[k + 1 :]
+        b = f[k, k + 1 :]
+        for i in range(n - 1 - k):
+            a[i] -= b[i] * xk
     for k in range(n):
         x[k] /= d[k]
     for k in range(n - 1, 0, -1):  # L' y = z: column k of L' is row k of L
         xk = x[k]
-        if xk != 0.0:
-            a = x[:k]
-            b = f[k, :k]
-            for i in range(k):
-                a[i] -= b[i] * xk
+        a = x[:k]
+        b = f[k, :k]
+        for i in range(k):
+            a[i] -= b[i] * xk
 
 
 @njit(cache=True)
-def _center_normalize(x):  # noqa: ANN001, ANN202
+def _center_normalize(x, tmp):  # noqa: ANN001, ANN202
     """``x <- (x - mean x) / ||x - mean x||``; returns the norm before scaling."""
     n = len(x)
-    mean = 0.0
-    for i in range(n):
-        mean += x[i]
-    mean /= n
-    norm = 0.0
+    mean = _sum(x) / n
     for i in range(n):
         x[i] -= mean
-        norm += x[i] * x[i]
-    norm = math.sqrt(norm)
+        tmp[i] = x[i] * x[i]
+    norm = math.sqrt(_sum(tmp))
     if norm > 0.0 and math.isfinite(norm):
         for i in range(n):
             x[i] /= norm
     return norm
-
-
-@njit(cache=True)
-def _rayleigh(lap, x, lx):  # noqa: ANN001, ANN202
-    """Rayleigh quotient ``x' L x`` of a unit ``x`` and its residual's squared norm."""
-    _matvec(lap, x, lx)
-    n = len(x)
-    theta = 0.0
-    for i in range(n):
-        theta += x[i] * lx[i]
-    res = 0.0
-    for i in range(n):
-        e = lx[i] - theta * x[i]
-        res += e * e
-    return theta, res
 
 
 @njit(cache=True)
@@ -160,45 +223,19 @@ def _ritz_low(a, b, c, g):  # noqa: ANN001, ANN202
 def small_fiedler_kernel(  # noqa: ANN201, PLR0913
     lap, guess, shift_rel, tiny_rel, tol_rel, vec_tol, max_iter, max_factor
 ):  # noqa: ANN001
-    """``(status, lambda2, vector, solves, factorizations)`` of the dense Laplacian ``lap``.
+    """:func:`tether.graph.small.small_fiedler` with its settings as arguments.
 
-    1. ``x``: the guess, zero-mean and unit. The Rayleigh quotient of any such vector
-       bounds lambda2 from above (Courant-Fischer on the complement of the constant
-       vector); ``upper`` is the best so far. ``upper <= tiny_rel * max_i L_ii``:
-       status ``TINY`` (a disconnected graph, or nearly: the caller's exact solver and
-       component check decide).
-    2. ``tau = upper (1 + rel)`` (``rel = shift_rel``); ``L - tau I = L D L' - E``.
-       Exactly two negative pivots mean ``L - tau I + E`` has exactly two negative
-       eigenvalues (Sylvester), so by Weyl ``lambda3 >= tau - eta`` with
-       ``eta >= ||E||_2``. More than two (``lambda3 < tau``: the guess is closer to
-       lambda3's vector, or the gap is small): once ``rel`` is divided by 100 and
-       ``L - tau I`` factored again, then status ``INERTIA``.
-    3. Shifted inverse iteration on the complement of the constant vector. With the
-       Rayleigh quotient ``theta`` and residual ``r = ||L x - theta x||`` of the unit
-       iterate, ``gap = tau - eta - theta > 0`` bounds ``lambda3 - theta`` from below,
-       so Temple's inequality gives ``theta - r^2 / gap <= lambda2 <= theta`` and the
-       angle to the Fiedler vector is at most ``r / gap`` (Davis-Kahan). It returns
-       once ``r^2 / gap <= tol_rel * theta`` and ``r`` is at rounding level
-       (``floor = 4 eps sqrt(n) max_i L_ii``) on two solves in a row, or stopped
-       improving with ``r <= max(floor, vec_tol gap)``.
-    4. The shift moves (a new factorization at a smaller ``upper``) when the residual
-       falls by less than ten times per solve (``upper = theta``, or ``rel`` divided
-       by 100 once ``theta`` no longer moves: lambda3 is close), or when ``theta``
-       rises (the iterate turns towards lambda3's vector, closer to ``tau``): then
-       ``upper`` is the smaller Ritz value on the last two iterates, whose span holds
-       most of both vectors, and the iterate its Ritz vector.
-
-    At most ``max_iter`` solves and ``max_factor`` factorizations (else
-    ``NO_CONVERGENCE`` or ``INERTIA``). The vector is unit, zero-mean, its sign not fixed.
+    Returns ``(status, lambda2, vector, solves, factorizations)``.
     """
     n = len(guess)
     x = guess.astype(np.float64)
-    if n < 2 or lap.shape[0] != n or not _center_normalize(x) > 0.0:
+    tmp = np.empty(n)
+    if n < 2 or n > MAX_N or lap.shape[0] != n or not _center_normalize(x, tmp) > 0.0:
         return BAD_GUESS, 0.0, x, 0, 0
     lx = np.empty(n)
-    upper, _ = _rayleigh(lap, x, lx)
-    top = 0.0
-    for i in range(n):
+    upper, _ = _rayleigh(lap, x, lx, tmp)
+    top = lap[0, 0]
+    for i in range(1, n):
         top = max(top, lap[i, i])
     if not upper > tiny_rel * top:
         return TINY, upper, x, 0, 0
@@ -216,7 +253,7 @@ def small_fiedler_kernel(  # noqa: ANN201, PLR0913
             if factors == max_factor:
                 return INERTIA, upper, x, solves, factors
             tau = upper * (1.0 + rel)
-            negative, eta = _ldlt(lap, tau, f, d)
+            negative, eta = _ldlt(lap, tau, f, d, tmp)
             factors += 1
             if negative < 0:
                 return BREAKDOWN, upper, x, solves, factors
@@ -235,26 +272,30 @@ def small_fiedler_kernel(  # noqa: ANN201, PLR0913
         _solve(f, d, x)
         solves += 1
         since += 1
-        if not _center_normalize(x) > 0.0:
+        if not _center_normalize(x, tmp) > 0.0:
             return BREAKDOWN, upper, x, solves, factors
-        theta, res = _rayleigh(lap, x, lx)
+        theta, res = _rayleigh(lap, x, lx, tmp)
         r = math.sqrt(res)
         gap = tau - eta - theta
-        if theta > 0.0 and gap > 0.0 and res <= tol_rel * theta * gap:
-            if (r <= floor and last <= floor) or (r >= 0.7 * last and r <= vec_tol * gap):
-                return OK, theta, x, solves, factors
+        certified = theta > 0.0 and gap > 0.0 and res <= tol_rel * theta * gap
+        if certified and (
+            (r <= floor and last <= floor) or (r >= 0.7 * last and r <= vec_tol * gap)
+        ):
+            return OK, theta, x, solves, factors
         if theta > theta_prev:  # turning towards lambda3: Ritz pair on {prev, x}
-            b, g = 0.0, 0.0
             for i in range(n):
-                b += prev[i] * lx[i]
-                g += prev[i] * x[i]
+                tmp[i] = prev[i] * lx[i]
+            b = _sum(tmp)
+            for i in range(n):
+                tmp[i] = prev[i] * x[i]
+            g = _sum(tmp)
             mu, alpha, beta = _ritz_low(theta_prev, b, theta, g)
             if mu < upper * (1.0 - rel):
                 for i in range(n):
-                    x[i] = alpha * prev[i] + beta * x[i]
-                if not _center_normalize(x) > 0.0:
+                    x[i] = alpha * prev[i] + beta * x[i]  # numpy: alpha * prev + beta * x
+                if not _center_normalize(x, tmp) > 0.0:
                     return BREAKDOWN, upper, x, solves, factors
-                theta, res = _rayleigh(lap, x, lx)
+                theta, res = _rayleigh(lap, x, lx, tmp)
                 r = math.sqrt(res)
                 if theta < upper:
                     upper = theta
@@ -273,4 +314,7 @@ def small_fiedler_kernel(  # noqa: ANN201, PLR0913
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernel on a 3-node path."""
     lap = np.array([[1.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
-    small_fiedler_kernel(lap, np.array([-1.0, 0.1, 1.0]), 1e-3, 1e-9, 1e-14, 1e-10, 30, 4)
+    small_fiedler_kernel(
+        lap, np.array([-1.0, 0.1, 1.0]), SHIFT_REL, TINY_REL, TOL_REL, VEC_TOL, MAX_SOLVES,
+        MAX_FACTORIZATIONS,
+    )  # fmt: skip
