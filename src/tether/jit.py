@@ -45,6 +45,7 @@ KERNEL_MODULES = (
     "world/los_kernels.py",
     "graph/kernels.py",
     "graph/grid_kernels.py",
+    "graph/small_kernels.py",
     "recurrent/planning/steiner_kernels.py",
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",

@@ -382,6 +382,9 @@ def warm_up() -> float:
     from tether.graph.grid_kernels import warm_up as grid_warm_up
 
     grid_warm_up()
+    from tether.graph.small_kernels import warm_up as small_warm_up
+
+    small_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds

@@ -16,10 +16,12 @@ import scipy.linalg
 import scipy.linalg.lapack
 from scipy.sparse.linalg import eigsh
 
+from tether import jit
+from tether.graph import small
 from tether.graph.structure import components, laplacian, laplacian_dense
 from tether.graph.warm import warm_fiedler
 
-Method = Literal["auto", "dense", "subset", "sparse", "warm"]
+Method = Literal["auto", "lapack", "dense", "subset", "sparse", "warm", "small"]
 
 DENSE_MAX_N = 16  # "auto": full numpy eigh up to this size
 SUBSET_MAX_N = 400  # "auto": only the second eigenpair (LAPACK syevr) up to this size
@@ -59,6 +61,20 @@ def _subset(
     if info != 0 or m != 1:
         vals, vecs = scipy.linalg.eigh(a, subset_by_index=[1, 1], driver="evr", check_finite=False)
     return max(float(vals[0]), 0.0), vecs[:, 0]
+
+
+def _small(lap: np.ndarray, guess: np.ndarray) -> tuple[float, np.ndarray] | None:
+    """:func:`tether.graph.small.small_fiedler` (compiled when kernels run: same bits)."""
+    if jit.enabled():
+        from tether.graph.small_kernels import small_fiedler_kernel
+
+        status, lam, vec, _, _ = small_fiedler_kernel(
+            lap, np.ascontiguousarray(guess, dtype=float), small.SHIFT_REL, small.TINY_REL,
+            small.TOL_REL, small.VEC_TOL, small.MAX_SOLVES, small.MAX_FACTORIZATIONS,
+        )  # fmt: skip
+    else:
+        status, lam, vec, _, _ = small.small_fiedler(lap, guess)
+    return (float(lam), vec) if status == small.OK else None
 
 
 def _sparse(n: int, pairs: np.ndarray, w: np.ndarray | None) -> tuple[float, np.ndarray]:
@@ -107,8 +123,13 @@ def fiedler(
         ``"warm"``: the certified inverse iteration of
         :func:`tether.graph.warm.warm_fiedler` from ``guess``, falling back
         to ``"sparse"`` when it cannot certify its answer.
-        ``"auto"``: ``dense`` up to ``DENSE_MAX_N`` nodes, ``subset`` up to
+        ``"small"``: the certified inverse iteration of
+        :func:`tether.graph.small.small_fiedler` on the dense Laplacian from
+        ``guess``, falling back to ``"subset"`` when it cannot certify its answer.
+        ``"lapack"``: ``dense`` up to ``DENSE_MAX_N`` nodes, ``subset`` up to
         ``SUBSET_MAX_N``, then ``warm`` when a guess is given, else ``sparse``.
+        ``"auto"``: as ``"lapack"``, but ``small`` instead of ``subset`` when a
+        guess is given (the same eigenpair, certified; not the same last bits).
     guess
         A previous Fiedler vector: it fixes the sign of the result (so that a
         warm estimator or a finite-difference test sees a continuous vector)
@@ -128,11 +149,11 @@ def fiedler(
     w = None if weights is None else np.asarray(weights, dtype=float)
     if n < 2:
         return 0.0, np.zeros(n)
-    if method == "auto":
+    if method in ("auto", "lapack"):
         if n <= DENSE_MAX_N:
             method = "dense"
         elif n <= SUBSET_MAX_N:
-            method = "subset"
+            method = "small" if method == "auto" and guess is not None else "subset"
         else:
             method = "warm" if guess is not None else "sparse"
     warm = None
@@ -149,15 +170,22 @@ def fiedler(
         if vec is not None:
             return 0.0, vec
     lap = None
-    if method in ("dense", "subset"):
+    if method in ("dense", "subset", "small"):
         lap = laplacian_dense(n, pairs, w) if laplacian is None else laplacian
+    if method == "small":
+        if guess is None:
+            raise ValueError("method 'small' needs a guess (a previous Fiedler vector)")
+        warm = _small(lap, guess)
+        method = "subset" if warm is None else "warm"
+    if method in ("dense", "subset"):
         lam, vec = _dense(n, pairs, w, lap) if method == "dense" else _subset(n, pairs, w, lap)
     elif method == "sparse":
         lam, vec = _sparse(n, pairs, w)
     elif method == "warm":
         lam, vec = warm
     else:
-        raise ValueError(f"unknown method {method!r}; expected auto, dense, subset, sparse or warm")
+        names = "auto, lapack, dense, subset, sparse, warm or small"
+        raise ValueError(f"unknown method {method!r}; expected {names}")
     if (
         method != "sparse"
         and _maybe_tiny(lam, pairs, w, lap)
