@@ -15,12 +15,15 @@ from __future__ import annotations
 
 import math
 import time
+from functools import cache
 
 import numpy as np
 from numba import njit
 
 from tether import jit
+from tether.graph import small
 from tether.graph.kernels import laplacian_dense_kernel
+from tether.graph.small_kernels import small_fiedler_kernel
 from tether.world.clearance_kernels import segments_nearest_cached
 
 #: below this many robots the pairs are found by testing all of them
@@ -242,10 +245,12 @@ def weights_kernel(  # noqa: ANN201, PLR0913
     return pair_factor, dP_di, dP_dj, clear, collision, coll_pairs, coll_unit, coll_logd
 
 
+@cache
 def no_obstacles(dim: int) -> tuple:
     """:func:`evaluate_kernel`'s obstacle arguments for a world without obstacle points.
 
-    Arrays of the types an obstacle index passes, so that both share one compilation.
+    Arrays of the types an obstacle index passes, so that both share one compilation
+    (made once per dimension: the kernel only reads them when there are obstacles).
     """
     i, f1, f2 = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, dim))
     tree = (f2, i, f2, f2, i, i, i, f2, f1)
@@ -313,6 +318,29 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
     return pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added
 
 
+@njit(cache=True)
+def evaluate_small_kernel(  # noqa: ANN201, PLR0913
+    q, rs_inner, rs, ro, ro_outer, rc, rc_outer, obstacles, points, tree, table, used, slack,
+    field, order, guess, small,
+):  # noqa: ANN001  # fmt: skip
+    """:func:`evaluate_kernel` with the Laplacian, then the small Fiedler solver on it.
+
+    ``guess`` is the warm start and ``small`` the settings ``(shift_rel, tiny_rel,
+    tol_rel, vec_tol, max_solves, max_factorizations)`` of
+    :func:`~tether.graph.small_kernels.small_fiedler_kernel`; returns
+    :func:`evaluate_kernel`'s tuple and that kernel's ``(status, lambda2, vector)``
+    (status -1 when the clearance table must grow first). One call for the weights and
+    the eigenpair of a sub-step: the same arithmetic as the two calls, so the same bits.
+    """
+    out = evaluate_kernel(q, rs_inner, rs, ro, ro_outer, rc, rc_outer, True, obstacles, points,
+                          tree, table, used, slack, field, order)  # fmt: skip
+    if out[-1] < 0:
+        return out, -1, 0.0, guess.copy()
+    status, lam, vec, _, _ = small_fiedler_kernel(out[10], guess, small[0], small[1], small[2],
+                                                  small[3], small[4], small[5])  # fmt: skip
+    return out, status, lam, vec
+
+
 def warm_up() -> float:
     """Compile or load (from numba's cache) every kernel of the continuous strategies.
 
@@ -361,6 +389,8 @@ def warm_up() -> float:
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
+        evaluate_small_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, obs is not None, points_, tree,
+                              table, used, 0.25, fld, 1, nu, small.SETTINGS)  # fmt: skip
     from tether.continuous.round_kernels import warm_up as rounds_warm_up
 
     rounds_warm_up()

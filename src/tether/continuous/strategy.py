@@ -33,7 +33,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.dynamics import IntegratorParams, integrate
 from tether.continuous.estimation import EstimatorParams, FiedlerEstimator, estimate_errors
-from tether.continuous.gradient import connectivity_force, messages
+from tether.continuous.gradient import connectivity_force, exact_force, messages
 from tether.continuous.params import TABLE2, ConnectivityParams
 from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
@@ -293,8 +293,10 @@ class ConnectivityStrategy(Strategy):
     # ----------------------------------------------------------------- evaluation
 
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
-        graph = compute_weights(q, self.conn, self.obstacles)
-        if self.params.eigensolver == "exact" or self.params.safeguard:
+        exact = self.params.eigensolver == "exact" or self.params.safeguard
+        # with the guess, the kernels solve the eigenpair in the weights' call (same bits)
+        graph = compute_weights(q, self.conn, self.obstacles, guess=self._nu if exact else None)
+        if exact:
             lam, nu = graph.fiedler(guess=self._nu)
         else:
             lam, nu = np.inf, None
@@ -304,7 +306,7 @@ class ConnectivityStrategy(Strategy):
         graph, lam, nu = cache
         if self.estimator is None:
             self._nu = nu
-            return connectivity_force(graph, lam, messages(graph, nu), self.conn)
+            return exact_force(graph, lam, nu, self.conn)
         est = self.estimator
         est.update(graph, self.params.estimator.rounds_per_substep)
         if nu is not None:

@@ -63,15 +63,19 @@ def _subset(
     return max(float(vals[0]), 0.0), vecs[:, 0]
 
 
-def _small(lap: np.ndarray, guess: np.ndarray) -> tuple[float, np.ndarray] | None:
-    """:func:`tether.graph.small.small_fiedler` (compiled when kernels run: same bits)."""
-    if jit.enabled():
+def _small(
+    lap: np.ndarray, guess: np.ndarray, done: tuple | None
+) -> tuple[float, np.ndarray] | None:
+    """:func:`tether.graph.small.small_fiedler` (compiled when kernels run: same bits),
+    or its ``(status, lambda2, vector)`` computed already (``done``)."""
+    if done is not None:
+        status, lam, vec = done
+    elif jit.enabled():
         from tether.graph.small_kernels import small_fiedler_kernel
 
         status, lam, vec, _, _ = small_fiedler_kernel(
-            lap, np.ascontiguousarray(guess, dtype=float), small.SHIFT_REL, small.TINY_REL,
-            small.TOL_REL, small.VEC_TOL, small.MAX_SOLVES, small.MAX_FACTORIZATIONS,
-        )  # fmt: skip
+            lap, np.ascontiguousarray(guess, dtype=float), *small.SETTINGS
+        )
     else:
         status, lam, vec, _, _ = small.small_fiedler(lap, guess)
     return (float(lam), vec) if status == small.OK else None
@@ -106,6 +110,7 @@ def fiedler(
     method: Method = "auto",
     guess: np.ndarray | None = None,
     laplacian: np.ndarray | None = None,
+    small_result: tuple[int, float, np.ndarray] | None = None,
 ) -> tuple[float, np.ndarray]:
     """lambda2 and a unit Fiedler vector of a (weighted) graph.
 
@@ -137,6 +142,10 @@ def fiedler(
     laplacian
         ``laplacian_dense(n, pairs, weights)`` if the caller has it already (the
         dense solvers then skip building it; it must be exactly that matrix).
+    small_result
+        ``(status, lambda2, vector)`` of :func:`tether.graph.small.small_fiedler` for
+        exactly ``laplacian`` and ``guess``, if a caller's kernel computed it already
+        (a fused sub-step); used where ``"small"`` would run it.
 
     Returns
     -------
@@ -175,7 +184,7 @@ def fiedler(
     if method == "small":
         if guess is None:
             raise ValueError("method 'small' needs a guess (a previous Fiedler vector)")
-        warm = _small(lap, guess)
+        warm = _small(lap, guess, small_result)
         method = "subset" if warm is None else "warm"
     if method in ("dense", "subset"):
         lam, vec = _dense(n, pairs, w, lap) if method == "dense" else _subset(n, pairs, w, lap)

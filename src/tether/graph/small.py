@@ -65,6 +65,8 @@ MAX_SOLVES = 30
 MAX_FACTORIZATIONS = 4
 #: largest team (the compiled kernel's sums are numpy's up to this size)
 MAX_N = 960
+#: the settings in the order the compiled kernels take them
+SETTINGS = (SHIFT_REL, TINY_REL, TOL_REL, VEC_TOL, MAX_SOLVES, MAX_FACTORIZATIONS)
 #: ``u / (1 - (n + 1) u)``-style constant of the backward-error bound: the unit roundoff
 UNIT_ROUNDOFF = 2.0**-53
 
