@@ -24,7 +24,7 @@ from tether.graph.warm import warm_fiedler
 Method = Literal["auto", "lapack", "dense", "subset", "sparse", "warm", "small"]
 
 DENSE_MAX_N = 16  # "auto": full numpy eigh up to this size
-SUBSET_MAX_N = 400  # "auto": only the second eigenpair (LAPACK syevr) up to this size
+SUBSET_MAX_N = 400  # "auto": the small solver from a guess, else syevr, up to this size
 
 #: lambda2 below this (relative to the largest degree) is checked against the components,
 #: so that a disconnected graph gets exactly 0 rather than rounding noise
