@@ -221,7 +221,7 @@ def _maybe_tiny(
     """
     if lap is None or len(pairs) == 0:
         return True
-    return lam <= _TINY_REL * float(np.max(np.diagonal(lap))) * (1.0 + 1e-6)
+    return lam <= _TINY_REL * float(lap.diagonal().max()) * (1.0 + 1e-6)
 
 
 def _max_degree(n: int, pairs: np.ndarray, w: np.ndarray | None) -> float:
