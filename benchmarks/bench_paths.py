@@ -12,7 +12,12 @@ Measures, on one machine (recorded with :func:`tether.runfolder.machine`):
   at ``Rgrid = 0.75 m`` (distance field included on the first call), ``plan_path``,
   ``smooth_path``, ``closest_point`` and ``virtual_state`` between random free points.
 
-Usage: python benchmarks/bench_paths.py [--repeats 5] [--out benchmarks/results/paths.json]
+Each is timed with the compiled A* (``paths/astar_kernels.py``) and with the Python
+reference in the same run (``--kernels both``, the default; ``on`` or ``off`` for one),
+after a warm-up that loads the kernel from numba's cache.
+
+Usage: python benchmarks/bench_paths.py [--repeats 5] [--kernels both|on|off]
+       [--out benchmarks/results/paths.json]
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tether import jit
 from tether.paths.astar import astar_grid, plan_path, planning_grid
 from tether.paths.bspline import closest_point, smooth_path
 from tether.paths.virtual_point import virtual_state
@@ -116,6 +122,7 @@ def bench_town(n_pairs: int) -> dict:
     ends = free_positions(world, 2 * n_pairs, rng, clearance_m=1.0)
     t_plan, t_smooth, t_closest, t_virtual, kinds, lengths = [], [], [], [], [], []
     cpu_plan: list[float] = []
+    cpu_smooth: list[float] = []
     for a, b in ends.reshape(n_pairs, 2, 3):
         wp, dt = timed(plan_path, world, a, b, cell_m=cell, planning=plan)
         if wp is None:
@@ -124,6 +131,7 @@ def bench_town(n_pairs: int) -> dict:
         cpu_plan.append(CPU_S[-1])
         path, dt = timed(smooth_path, wp, world, planning=plan)
         t_smooth.append(dt)
+        cpu_smooth.append(CPU_S[-1])
         kinds.append(path.kind)
         lengths.append(path.length_m)
         q = path.point(0.4 * path.length_m) + 0.5
@@ -137,7 +145,7 @@ def bench_town(n_pairs: int) -> dict:
         "planning_grid_first_ms": 1e3 * first,
         "planning_grid_cached_df_ms": 1e3 * again,
         "plan_path": summary_ms(t_plan, cpu_plan),
-        "smooth_path": summary_ms(t_smooth),
+        "smooth_path": summary_ms(t_smooth, cpu_smooth),
         "closest_point": summary_ms(t_closest),
         "virtual_state": summary_ms(t_virtual),
         "smoothed_kinds": {k: kinds.count(k) for k in sorted(set(kinds))},
@@ -150,17 +158,33 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--pairs", type=int, default=20)
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results/paths.json")
+    parser.add_argument("--kernels", choices=("both", "on", "off"), default="both")
     args = parser.parse_args()
     load_before = os.getloadavg()
-    result = {
-        "machine": machine(),
-        "astar_town_like": bench_astar(args.repeats),
-        "town": bench_town(args.pairs),
-    }
+    result: dict = {"machine": machine()}
+    modes = {"both": ("off", "on"), "on": ("on",), "off": ("off",)}[args.kernels]
+    if "on" in modes:
+        from tether.paths.astar_kernels import warm_up
+
+        warm_up()
+    for mode in modes:
+        with jit.using(mode == "on"):
+            name = "compiled" if mode == "on" else "reference"
+            result[name] = {"astar_town_like": bench_astar(args.repeats),
+                            "town": bench_town(args.pairs)}  # fmt: skip
     # other jobs on the machine slow the pure-Python search: record the load around it
     result["load_average_1min_before_after"] = [load_before[0], os.getloadavg()[0]]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=2) + "\n")
+    for name in ("reference", "compiled"):
+        if name in result:
+            print(f"== {name} A*")
+            report(result[name])
+    print(f"wrote {args.out}")
+
+
+def report(result: dict) -> None:
+    """Print one mode's numbers."""
     a = result["astar_town_like"]
     t = result["town"]
     print(f"A* {SHAPE} town-like, occupied {a['occupied_fraction']:.0%}:")
@@ -168,8 +192,8 @@ def main() -> None:
         c, r = a[h]["corner_to_corner"], a[h]["random_pairs"]
         print(
             f"  {h:9s} corner-to-corner median {c['median_ms']:.0f} ms (max {c['max_ms']:.0f},"
-            f" CPU {c['cpu_median_ms']:.0f}), random pairs median {r['median_ms']:.0f} ms"
-            f" (max {r['max_ms']:.0f}, CPU {r['cpu_median_ms']:.0f})"
+            f" CPU {c['cpu_median_ms']:.1f}), random pairs median {r['median_ms']:.1f} ms"
+            f" (max {r['max_ms']:.0f}, CPU {r['cpu_median_ms']:.1f})"
         )
     hard = a["adversarial_wall_one_hole"]
     print(
@@ -184,7 +208,7 @@ def main() -> None:
     )
     for key in ("plan_path", "smooth_path", "closest_point", "virtual_state"):
         print(f"  {key:14s} median {t[key]['median_ms']:.2f} ms, max {t[key]['max_ms']:.2f} ms")
-    print(f"  smoothed: {t['smoothed_kinds']}; wrote {args.out}")
+    print(f"  smoothed: {t['smoothed_kinds']}")
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ import pytest
 from tether import jit
 from tether.comm import CommParams, MessageLayer
 from tether.config import load_scenario
-from tether.continuous.recruit import HelpFlood, help_depth, help_force
+from tether.continuous.recruit import HelpFlood, RequestDepth, help_depth, help_force
 from tether.record import TrajectoryRecorder
 from tether.runner import build
 from tether.sim import simulate
@@ -33,6 +33,36 @@ def test_the_request_deepens_with_the_stall_and_is_capped() -> None:
     assert help_depth(10.0, 10.0, 4) == 1 and help_depth(29.9, 10.0, 4) == 2
     assert np.all(np.diff(depths) >= 0) and max(depths) == 4
     assert help_depth(float("nan"), 10.0, 4) == 0
+
+
+def _crawl(depth: RequestDepth, bursts: list[tuple[float, float]], prime: int = 3) -> list[int]:
+    """Feed ``(stall, moving)`` bursts at 10 Hz: stalled for ``stall`` s, then progressing."""
+    seen = []
+    for stall_s, moving_s in bursts:
+        seen += [depth.update(prime, k / 10)[0] for k in range(int(round(stall_s * 10)))]
+        seen += [depth.update(prime, 0.0)[0] for _ in range(int(round(moving_s * 10)))]
+    return seen
+
+
+def test_a_prime_crawling_in_bursts_keeps_and_deepens_its_request_until_its_turn_ends() -> None:
+    bursts = [(35.0, 2.0)] * 5  # stalls of 35 s (1 hop after 20 s), short progress between
+    plain = _crawl(RequestDepth(20.0, 8, until="progress"), bursts)
+    sticky = RequestDepth(20.0, 8, until="arrival")
+    kept = _crawl(sticky, bursts)
+    assert max(plain) == 1 and plain[-1] == 0  # every request starts again at 1 hop and ends
+    assert max(kept) == 5  # one hop deeper per stall: 1, 2, 3, 4, 5
+    assert min(kept[200:]) >= 1  # never dropped once asked, progress or not
+    assert np.all(np.diff(kept) >= 0)
+    assert max(_crawl(RequestDepth(20.0, 3, until="arrival"), bursts)) == 3  # the cap
+    assert sticky.update(7, 0.0) == (0, "ended")  # another prime: the old request ends
+
+
+def test_a_new_prime_starts_its_request_from_one_hop() -> None:
+    depth = RequestDepth(20.0, 8, until="arrival")
+    _crawl(depth, [(45.0, 1.0)] * 3, prime=3)  # prime 3 reached 6 hops
+    assert max(_crawl(depth, [(25.0, 1.0)], prime=5)) == 1
+    assert depth.update(-1, 0.0) == (0, "ended")  # no prime: no request
+    assert RequestDepth(None, 8).update(2, 1e3) == (0, None)  # help switched off
 
 
 @pytest.mark.parametrize("seed", range(8))

@@ -66,8 +66,19 @@ class RunOutcome:
     summary: dict[str, Any]
 
 
+#: worlds of procedural scenes with a fixed layout seed (``world.params.seed``), per process
+_WORLDS: dict[str, World] = {}
+_WORLDS_KEPT = 4
+
+
 def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
-    """The scenario's world from the scene registry (``free``, ``map``, ``town``, ...)."""
+    """The scenario's world from the scene registry (``free``, ``map``, ``town``, ...).
+
+    A scene whose layout is fixed by ``world.params.seed`` (and read from no file)
+    is built once per process and shared by later runs with the same parameters:
+    a campaign's worker then builds the town, its distance field and its obstacle
+    index once, not per trial. Nothing in a run changes a world.
+    """
     src, cfg = scenario.source, scenario.world
     if cfg.scene not in SCENES:
         raise ScenarioError(
@@ -89,10 +100,21 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
                     "relative to one of them or an absolute one"
                 )
             params[key] = str(resolved)
-    try:
-        world = make_scene(cfg.scene, rng, **params)
-    except (MapError, ScenarioError) as exc:
-        raise ScenarioError(f"{src}: {field}: {exc}") from None
+    # a procedural layout fixed by its own seed is the same world for every run: keep it
+    # (with its distance field and obstacle index) for the next runs of this process
+    key = None
+    if "seed" in params and field == "world.params":
+        key = repr((cfg.scene, sorted(params.items())))
+    world = _WORLDS.get(key) if key is not None else None
+    if world is None:
+        try:
+            world = make_scene(cfg.scene, rng, **params)
+        except (MapError, ScenarioError) as exc:
+            raise ScenarioError(f"{src}: {field}: {exc}") from None
+        if key is not None:
+            if len(_WORLDS) >= _WORLDS_KEPT:
+                _WORLDS.pop(next(iter(_WORLDS)))
+            _WORLDS[key] = world
     if world.dim != cfg.dim:
         raise ScenarioError(
             f"{src}: world.dim: scene {cfg.scene!r} is {world.dim}-D; set dim: {world.dim}"

@@ -69,8 +69,11 @@ def pairs_in_range(q, r):  # noqa: ANN001, ANN201
     """All pairs ``(i, j)``, ``i < j``, with ``||q_i - q_j|| < r``, in lexicographic order.
 
     All pairs are tested below ``BRUTE_MAX_N`` robots; above, robots are bucketed in
-    cubes of side ``r`` (sorted cube codes, binary search for the neighbouring cubes)
-    and each robot's partners sorted, ``O(n log n + m)``.
+    cubes of side ``r`` and each robot's partners sorted: the cubes in one array
+    (:func:`_pairs_dense_cells`, ``O(n + m)``) when there are at most ``4 n + 1024``
+    of them, else sorted cube codes with a binary search for the neighbouring cubes,
+    ``O(n log n + m)``. The cell list of Allen and Tildesley, *Computer Simulation of
+    Liquids*, Sec. 5.3.2.
     """
     n, dim = q.shape
     cap = 16 * n + 16
@@ -103,6 +106,13 @@ def pairs_in_range(q, r):  # noqa: ANN001, ANN201
         for d in range(dim):
             c = c * size[d] + cell[k, d] + 1
         code[k] = c
+    n_cells = 1
+    for d in range(dim):
+        n_cells *= size[d]
+        if n_cells > 4 * n + 1024:
+            break
+    if n_cells <= 4 * n + 1024:
+        return _pairs_dense_cells(q, r, code, size, n_cells, out)
     order = np.argsort(code, kind="mergesort")
     sorted_code = code[order]
     partners = np.empty(n, np.int64)
@@ -129,6 +139,68 @@ def pairs_in_range(q, r):  # noqa: ANN001, ANN201
                     partners[cnt] = j
                     cnt += 1
         partners[:cnt].sort()
+        while m + cnt > len(out):
+            out = _grow(out)
+        for k in range(cnt):
+            out[m, 0], out[m, 1] = i, partners[k]
+            m += 1
+    return out[:m].copy()
+
+
+@njit(cache=True)
+def _pairs_dense_cells(q, r, code, size, n_cells, out):  # noqa: ANN001, ANN202, PLR0913
+    """:func:`pairs_in_range`'s cube search with every cube in one array (counting sort).
+
+    The cube codes carry a margin of one cube on each side, so the ``3^dim``
+    neighbours of a robot's cube are its code plus fixed offsets, and a cube's robots
+    are one slice; the same cubes, distance test and order as the binary search.
+    """
+    n, dim = q.shape
+    start = np.zeros(n_cells + 1, np.int64)
+    for k in range(n):
+        start[code[k] + 1] += 1
+    for c in range(n_cells):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(n, np.int64)
+    for k in range(n):
+        order[fill[code[k]]] = k
+        fill[code[k]] += 1
+    n_nb = 3**dim
+    shift = np.zeros(n_nb, np.int64)
+    for nb in range(n_nb):
+        rest = nb
+        c = 0
+        for d in range(dim):
+            c = c * size[d] + rest % 3 - 1
+            rest //= 3
+        shift[nb] = c
+    partners = np.empty(n, np.int64)
+    # sqrt(s) < r, decided without the square root away from r * r (both roundings are
+    # within a relative 2^-52 of the exact values): the same pairs as _norm(diff) < r
+    surely_in = r * r * (1.0 - 1e-14)
+    surely_out = r * r * (1.0 + 1e-14)
+    m = 0
+    for i in range(n):
+        cnt = 0
+        for nb in range(n_nb):
+            c = code[i] + shift[nb]
+            for e in range(start[c], start[c + 1]):
+                j = order[e]
+                if j <= i:
+                    continue
+                acc = 0.0
+                for d in range(dim):
+                    x = q[i, d] - q[j, d]
+                    acc += x * x
+                if acc > surely_out or (acc >= surely_in and not math.sqrt(acc) < r):
+                    continue
+                f = cnt  # insertion sort: a robot has few partners
+                while f > 0 and partners[f - 1] > j:
+                    partners[f] = partners[f - 1]
+                    f -= 1
+                partners[f] = j
+                cnt += 1
         while m + cnt > len(out):
             out = _grow(out)
         for k in range(cnt):
@@ -250,7 +322,7 @@ def no_obstacles(dim: int) -> tuple:
     """:func:`evaluate_kernel`'s obstacle arguments for a world without obstacle points.
 
     Arrays of the types an obstacle index passes, so that both share one compilation
-    (made once per dimension: the kernel only reads them when there are obstacles).
+    (made once per dimension: they are read only where there are obstacles).
     """
     i, f1, f2 = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, dim))
     tree = (f2, i, f2, f2, i, i, i, f2, f1)
@@ -323,21 +395,15 @@ def evaluate_small_kernel(  # noqa: ANN201, PLR0913
     q, rs_inner, rs, ro, ro_outer, rc, rc_outer, obstacles, points, tree, table, used, slack,
     field, order, guess, small,
 ):  # noqa: ANN001  # fmt: skip
-    """:func:`evaluate_kernel` with the Laplacian, then the small Fiedler solver on it.
-
-    ``guess`` is the warm start and ``small`` the settings ``(shift_rel, tiny_rel,
-    tol_rel, vec_tol, max_solves, max_factorizations)`` of
-    :func:`~tether.graph.small_kernels.small_fiedler_kernel`; returns
-    :func:`evaluate_kernel`'s tuple and that kernel's ``(status, lambda2, vector)``
-    (status -1 when the clearance table must grow first). One call for the weights and
-    the eigenpair of a sub-step: the same arithmetic as the two calls, so the same bits.
-    """
+    """:func:`evaluate_kernel` with the Laplacian, then :func:`~tether.graph.small_kernels.
+    small_fiedler_kernel` on it from ``guess`` with the settings ``small``: a sub-step's
+    weights and eigenpair in one call, the same bits as two. Returns the former's tuple
+    and the latter's ``(status, lambda2, vector)`` (-1: the clearance table must grow)."""
     out = evaluate_kernel(q, rs_inner, rs, ro, ro_outer, rc, rc_outer, True, obstacles, points,
                           tree, table, used, slack, field, order)  # fmt: skip
     if out[-1] < 0:
         return out, -1, 0.0, guess.copy()
-    status, lam, vec, _, _ = small_fiedler_kernel(out[10], guess, small[0], small[1], small[2],
-                                                  small[3], small[4], small[5])  # fmt: skip
+    status, lam, vec, _, _ = small_fiedler_kernel(out[10], guess, *small)
     return out, status, lam, vec
 
 
@@ -412,9 +478,13 @@ def warm_up() -> float:
     from tether.graph.grid_kernels import warm_up as grid_warm_up
 
     grid_warm_up()
-    from tether.graph.small_kernels import warm_up as small_warm_up
+    from tether.paths.astar_kernels import warm_up as astar_warm_up
 
-    small_warm_up()
+    astar_warm_up()
+    from tether.graph.link_kernels import warm_up as link_warm_up
+
+    link_warm_up()
+    small_fiedler_kernel(np.array([[1.0, -1.0], [-1.0, 1.0]]), nu[:2].copy(), *small.SETTINGS)
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds

@@ -29,7 +29,7 @@ from tether.continuous.dynamics import integrate
 from tether.continuous.election import Election
 from tether.continuous.multi_target_params import MultiTargetParams
 from tether.continuous.placement import safe_team
-from tether.continuous.recruit import HelpFlood, help_depth, help_force
+from tether.continuous.recruit import HelpFlood, RequestDepth, help_force
 from tether.continuous.reference_filter import ReferenceFilter
 from tether.continuous.roles import ANCHOR, CONNECTOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
 from tether.continuous.strategy import ConnectivityStrategy
@@ -217,7 +217,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self.consensus = EfficiencyConsensus(n, MessageLayer(n, comm, rng), p.k_lambda_per_s)
         self.help = HelpFlood(n, state.dim, MessageLayer(n, comm, rng))
         self._helpers = np.zeros(0, dtype=int)
-        self._help_depth = 0
+        self._depth = RequestDepth(p.help_after_s, p.help_max_hops, p.help_until)
         self._help_requests = 0
         self._helper_s = 0.0
         self.planner = RolePlanner(
@@ -310,16 +310,14 @@ class MultiTargetStrategy(ConnectivityStrategy):
     ) -> None:
         """A stalled prime's help request, flooded; who follows whom (:mod:`.recruit`)."""
         p, pl = self.params, self.planner
-        depth = 0
-        if prime >= 0 and p.help_after_s is not None:
-            depth = help_depth(pl.stalled_s(prime, t_s), p.help_after_s, p.help_max_hops)
-        if depth != self._help_depth:
-            if depth > self._help_depth:
-                self._help_requests += self._help_depth == 0
-                self.emit("help_requested", prime, t_s=t_s, hops=depth)
-            elif depth == 0:
-                self.emit("help_ended", prime, t_s=t_s)
-            self._help_depth = depth
+        stalled_s = pl.stalled_s(prime, t_s) if prime >= 0 else 0.0
+        fresh = self._depth.depth == 0
+        depth, change = self._depth.update(prime, stalled_s)
+        if change == "requested":
+            self._help_requests += fresh
+            self.emit("help_requested", prime, t_s=t_s, hops=depth)
+        elif change == "ended":
+            self.emit("help_ended", prime, t_s=t_s)
         for _ in range(p.messages.rounds_per_step):
             self.help.round(links, q, prime, depth)
         self._helpers = self.help.helpers((pl.role == CONNECTOR) | (pl.role == SECONDARY))

@@ -63,7 +63,12 @@ class MultiTargetParams(ConnectivityStrategyParams):
     help_after_s: float | None = Field(
         default=20.0, gt=0, description="a stalled prime asks for help (None: never)"
     )
-    help_max_hops: int = Field(default=2, ge=1)
+    help_max_hops: int = Field(default=8, ge=1)
+    help_until: Literal["progress", "arrival"] = Field(
+        default="arrival",
+        description="what ends a help request: the prime's next "
+        "progress, or the end of its turn (arrival, drop, a new prime)",
+    )
     max_travel_force_n: float = Field(default=10.0, gt=0)
     election_criterion: Literal["path_length", "distance"] = "path_length"
     messages: MessagesConfig = Field(default_factory=MessagesConfig)

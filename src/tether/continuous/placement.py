@@ -43,7 +43,7 @@ def safe_team(
     box_margin_m
         Every robot at least this far inside the bounds (floor and ceiling in 3-D).
     """
-    obstacles = obstacles or ObstacleIndex.from_world(world)
+    obstacles = obstacles or ObstacleIndex.shared(world)
     dim = world.dim
     lo, hi = (
         world.bounds_m if world.bounds_m is not None else (-np.full(dim, 10.0), np.full(dim, 10.0))

@@ -95,11 +95,56 @@ class HelpFlood:
         return np.flatnonzero((self.hop >= 1) & np.isfinite(self.hop) & may_help)
 
 
-def help_depth(stalled_s: float, help_after_s: float, max_hops: int) -> int:
-    """Hops the request reaches after ``stalled_s`` without progress (0: no request)."""
+def help_depth(stalled_s: float, help_after_s: float, max_hops: int, base: int = 0) -> int:
+    """Hops the request reaches after ``stalled_s`` without progress (0: no request).
+
+    ``base``: the depth a request kept from an earlier stall of the same prime
+    (:class:`RequestDepth` with ``until="arrival"``); a new stall deepens it.
+    """
     if not np.isfinite(stalled_s) or stalled_s < help_after_s:
         return 0
-    return int(min(max_hops, 1 + (stalled_s - help_after_s) // help_after_s))
+    return int(min(max_hops, base + 1 + (stalled_s - help_after_s) // help_after_s))
+
+
+class RequestDepth:
+    """How deep the prime's help request reaches, step by step (the prime's own state).
+
+    ``update`` gives the depth and what changed: ``"requested"`` when the request
+    starts or deepens, ``"ended"`` when it stops. The request starts after
+    ``after_s`` without progress and deepens by one hop per further ``after_s``
+    (:func:`help_depth`). What ends it:
+
+    * ``until="progress"``: the prime's next progress by ``Rgrid``; a new stall starts
+      again from 1 hop;
+    * ``until="arrival"``: only the end of the prime's turn (it reached or dropped its
+      target, or another robot became prime). Progress keeps the request at its depth,
+      and each later stall of ``after_s`` adds a hop. A prime crawling in bursts (each
+      burst of help lets it progress, then it stalls again) thus keeps its helpers and
+      draws more, instead of waiting ``after_s`` alone before every burst.
+    """
+
+    def __init__(self, after_s: float | None, max_hops: int, until: str = "progress") -> None:
+        self.after_s, self.max_hops, self.sticky = after_s, max_hops, until == "arrival"
+        self.depth = 0
+        self._prime, self._base = -1, 0
+
+    def update(self, prime: int, stalled_s: float) -> tuple[int, str | None]:
+        """The depth for the current ``prime`` (-1: none), stalled for ``stalled_s``."""
+        same = prime == self._prime
+        if not same:  # a new prime (or none): its own request, from nothing
+            self._prime, self._base = prime, 0
+        depth = 0
+        if prime >= 0 and self.after_s is not None:
+            depth = help_depth(stalled_s, self.after_s, self.max_hops, self._base)
+            if self.sticky and same and depth == 0 and self.depth > 0:
+                self._base = depth = self.depth  # progress: the request keeps its depth
+        change = None
+        if depth > self.depth:
+            change = "requested"
+        elif depth == 0 and self.depth > 0:
+            change = "ended"
+        self.depth = depth
+        return depth, change
 
 
 def help_force(

@@ -37,6 +37,7 @@ from tether.continuous.gradient import connectivity_force, exact_force, messages
 from tether.continuous.params import TABLE2, ConnectivityParams
 from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
+from tether.graph.warm import WarmState
 from tether.registry import STRATEGIES
 from tether.sim import StepContext, Strategy, TeamState
 from tether.world.clearance import ObstacleIndex
@@ -252,7 +253,7 @@ class ConnectivityStrategy(Strategy):
     ) -> None:
         """One-line ``ScenarioError`` unless the initial weighted graph is in the safe set."""
         conn = params.connectivity()
-        graph = compute_weights(initial.positions, conn, ObstacleIndex.from_world(world))
+        graph = compute_weights(initial.positions, conn, ObstacleIndex.shared(world))
         lam, _ = graph.fiedler()
         if not lam > conn.lambda2_min:
             raise ScenarioError(
@@ -267,9 +268,10 @@ class ConnectivityStrategy(Strategy):
     def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
         super().reset(world, state, rng)
         self.world = world
-        self.obstacles = ObstacleIndex.from_world(world)
+        self.obstacles = ObstacleIndex.shared(world)
         self.n = state.n
         self._nu: np.ndarray | None = None
+        self._warm = WarmState()  # the large-team eigensolver's factorization, this run only
         self._held: np.ndarray | None = None
         self._held_until = -1.0
         self._current = None
@@ -297,7 +299,7 @@ class ConnectivityStrategy(Strategy):
         # with the guess, the kernels solve the eigenpair in the weights' call (same bits)
         graph = compute_weights(q, self.conn, self.obstacles, guess=self._nu if exact else None)
         if exact:
-            lam, nu = graph.fiedler(guess=self._nu)
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
         else:
             lam, nu = np.inf, None
         return lam, (graph, lam, nu)
@@ -347,7 +349,7 @@ class ConnectivityStrategy(Strategy):
     def _observe(self, q: np.ndarray, graph: Any, lam: float, nu: np.ndarray | None) -> None:
         """Track the invariants (exact lambda2, distances, clearances) for ``metrics``."""
         if nu is None and self.n <= 500:
-            lam, nu = graph.fiedler(guess=self._nu)
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
         if np.isfinite(lam):
             self._min["lambda2"] = min(self._min["lambda2"], float(lam))
         if len(graph.pairs):

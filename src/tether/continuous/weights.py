@@ -34,6 +34,7 @@ from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import smooth_step, smooth_step_log_derivative
 from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
+from tether.graph.warm import WarmState
 from tether.world.clearance import ObstacleIndex
 
 
@@ -85,11 +86,14 @@ class WeightedGraph:
         """Dense weighted Laplacian ``L = diag(W 1) - W``."""
         return laplacian_dense(self.n, self.pairs, self.weights)
 
-    def fiedler(self, *, guess: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    def fiedler(
+        self, *, guess: np.ndarray | None = None, state: WarmState | None = None
+    ) -> tuple[float, np.ndarray]:
         """Exact lambda2 and unit Fiedler vector of ``G_lambda`` (:func:`tether.graph.fiedler`).
 
         ``guess`` (a previous Fiedler vector) fixes the sign of the result and,
-        above ``SUBSET_MAX_N`` robots, is the certified warm start.
+        above ``SUBSET_MAX_N`` robots, is the certified warm start; ``state`` then
+        keeps the warm solver's factorization between steps.
         """
         w = self.weights
         lap = self._laplacian
@@ -98,7 +102,8 @@ class WeightedGraph:
 
             lap = laplacian_dense_kernel(self.n, self.pairs, w)
         done = self._small[1] if self._small is not None and guess is self._small[0] else None
-        return fiedler(self.n, self.pairs, w, guess=guess, laplacian=lap, small_result=done)
+        return fiedler(self.n, self.pairs, w, guess=guess, laplacian=lap, state=state,
+                       small_result=done)  # fmt: skip
 
 
 def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.ndarray:

@@ -8,7 +8,8 @@ here is plain arrays and sparse matrices, so that 10,000-robot teams stay cheap.
   Laplacians, connected components, stretch;
 * :mod:`tether.graph.fiedler` -- lambda2 and the Fiedler vector, one public
   function with ``method=`` dispatch (dense, subset, sparse, warm, small);
-* :mod:`tether.graph.warm` -- the certified warm-started solver for large teams;
+* :mod:`tether.graph.warm` -- the certified warm-started solver for large teams,
+  on :mod:`tether.graph.links` (a Laplacian kept as its links);
 * :mod:`tether.graph.small` -- the certified warm-started dense solver for teams of
   17-400 robots (compiled in :mod:`tether.graph.small_kernels`, same bits).
 """
@@ -25,11 +26,12 @@ from tether.graph.structure import (
     pairs_within,
     stretch,
 )
-from tether.graph.warm import warm_fiedler
+from tether.graph.warm import WarmState, warm_fiedler
 
 __all__ = [
     "DENSE_MAX_N",
     "SUBSET_MAX_N",
+    "WarmState",
     "adjacency",
     "algebraic_connectivity",
     "component_count",

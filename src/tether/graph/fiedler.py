@@ -19,7 +19,7 @@ from scipy.sparse.linalg import eigsh
 from tether import jit
 from tether.graph import small
 from tether.graph.structure import components, laplacian, laplacian_dense
-from tether.graph.warm import warm_fiedler
+from tether.graph.warm import WarmState, warm_fiedler
 
 Method = Literal["auto", "lapack", "dense", "subset", "sparse", "warm", "small"]
 
@@ -110,6 +110,7 @@ def fiedler(
     method: Method = "auto",
     guess: np.ndarray | None = None,
     laplacian: np.ndarray | None = None,
+    state: WarmState | None = None,
     small_result: tuple[int, float, np.ndarray] | None = None,
 ) -> tuple[float, np.ndarray]:
     """lambda2 and a unit Fiedler vector of a (weighted) graph.
@@ -142,6 +143,9 @@ def fiedler(
     laplacian
         ``laplacian_dense(n, pairs, weights)`` if the caller has it already (the
         dense solvers then skip building it; it must be exactly that matrix).
+    state
+        ``"warm"`` only: a :class:`tether.graph.warm.WarmState` that keeps the
+        solver's factorization from one call to the next (one per run).
     small_result
         ``(status, lambda2, vector)`` of :func:`tether.graph.small.small_fiedler` for
         exactly ``laplacian`` and ``guess``, if a caller's kernel computed it already
@@ -171,7 +175,7 @@ def fiedler(
             raise ValueError("method 'warm' needs a guess (a previous Fiedler vector)")
         # certified, so lambda2 > 0 (a connected graph) unless it is down at rounding level:
         # the components are checked after it, not before (they cost 10 % of a warm solve)
-        warm = warm_fiedler(n, pairs, w, guess)
+        warm = warm_fiedler(n, pairs, w, guess, state=state)
         if warm is None:
             method = "sparse"
     if method == "sparse":

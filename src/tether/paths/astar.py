@@ -30,6 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
+from tether import jit
 from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
@@ -78,6 +79,20 @@ def _heuristic(delta: np.ndarray, connectivity: str, heuristic: str) -> np.ndarr
     if a.shape[1] == 2:
         return math.sqrt(2.0) * a[:, 1] + (a[:, 0] - a[:, 1])
     return math.sqrt(3.0) * a[:, 2] + math.sqrt(2.0) * (a[:, 1] - a[:, 2]) + (a[:, 0] - a[:, 1])
+
+
+#: the last mask's component labels: a planner asks many paths on one planning grid
+_LABELS: dict[str, object] = {"key": None, "labels": None}
+
+
+def _labels(free: np.ndarray, connectivity: str) -> np.ndarray:
+    """Connected components of the free cells (``scipy.ndimage.label``), reused per mask."""
+    key = (free.shape, connectivity, free.tobytes())
+    if _LABELS["key"] != key:
+        full = connectivity == "full"
+        structure = ndimage.generate_binary_structure(free.ndim, free.ndim if full else 1)
+        _LABELS["key"], _LABELS["labels"] = key, ndimage.label(free, structure=structure)[0]
+    return _LABELS["labels"]  # type: ignore[return-value]
 
 
 def astar_grid(
@@ -148,8 +163,7 @@ def astar_grid(
         return start[None, :].copy()
     # unreachable goals would make A* close the start's whole component: label the
     # components first (scipy.ndimage, C speed) and answer None at once
-    structure = ndimage.generate_binary_structure(dim, dim if connectivity == "full" else 1)
-    labels, _ = ndimage.label(free, structure=structure)
+    labels = _labels(free, connectivity)
     if labels[tuple(start)] != labels[tuple(goal)]:
         return None
 
@@ -160,6 +174,15 @@ def astar_grid(
     strides = np.array([int(np.prod(pshape[k + 1 :])) for k in range(dim)], dtype=np.intp)
     s_idx = int((start + 1) @ strides)
     g_idx = int((goal + 1) @ strides)
+    if jit.enabled():  # the same search, compiled (same keys, same heap order, same path)
+        from tether.paths.astar_kernels import astar_kernel
+
+        flat = astar_kernel(
+            padded.ravel(), strides.astype(np.int64), (offsets @ strides).astype(np.int64),
+            np.sqrt((offsets * offsets).sum(axis=1).astype(float)), s_idx, g_idx,
+            (goal + 1).astype(np.int64), connectivity == "face", heuristic == "euclidean",
+        )  # fmt: skip
+        return np.stack(np.unravel_index(flat, pshape), axis=1) - 1
 
     # heuristic of every padded cell, in cells (vectorised once; O(V))
     coords = np.indices(pshape, dtype=np.intp).reshape(dim, -1).T

@@ -11,6 +11,7 @@ with the compiled kernel of :mod:`tether.world.clearance_kernels` when
 
 from __future__ import annotations
 
+import weakref
 from functools import cache, cached_property
 from itertools import chain
 
@@ -51,6 +52,10 @@ def einsum_order() -> int:
     return int(np.einsum("kd,kd->k", x, np.ones((1, 3)))[0] != 0.0)
 
 
+#: :meth:`ObstacleIndex.shared`: one index per live world object
+_SHARED: dict[int, tuple[weakref.ref, ObstacleIndex]] = {}
+
+
 class ObstacleIndex:
     """The obstacle point set ``O`` with a k-d tree, and an optional grid pre-screen.
 
@@ -72,6 +77,21 @@ class ObstacleIndex:
         self.tree = cKDTree(self.points) if len(self.points) else None
         # clearance lower bounds of recent segments: sorted keys, bound, endpoints then
         self._cache: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @classmethod
+    def shared(cls, world: World) -> ObstacleIndex:
+        """:meth:`from_world`, built once per world object and shared by its users.
+
+        Its caches (clearance bounds, the search table) only decide which searches
+        can be skipped, never their answers, so any number of users get the same
+        clearances as from a fresh index.
+        """
+        entry = _SHARED.get(id(world))
+        if entry is None or entry[0]() is not world:
+            entry = (weakref.ref(world), cls.from_world(world))
+            _SHARED[id(world)] = entry
+            weakref.finalize(world, _SHARED.pop, id(world), None)
+        return entry[1]
 
     @classmethod
     def from_world(cls, world: World) -> ObstacleIndex:
