@@ -195,3 +195,37 @@ def test_compiled_and_numpy_paths_of_fiedler_agree_bitwise() -> None:
     with jit.using(False):
         b = fiedler(n, pairs, w, guess=guess)
     assert a[0] == b[0] and np.array_equal(a[1], b[1])
+
+
+@pytest.mark.parametrize("method", ["auto", "lapack"])
+def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None:  # noqa: ANN001
+    """``fiedler_method: lapack`` never runs the small solver (the trajectories of before);
+    ``auto`` runs it, in the fused kernel or in ``fiedler``."""
+    import importlib
+
+    import tether.continuous.kernels as kernels
+    from tether.config import load_scenario
+    from tether.runner import build
+    from tether.sim import simulate
+
+    fiedler_module = importlib.import_module("tether.graph.fiedler")  # not the function
+    calls = {"small": 0}
+    original_small, original_fused = fiedler_module._small, kernels.evaluate_small_kernel
+
+    def counting_small(*args):  # noqa: ANN002, ANN202
+        calls["small"] += 1
+        return original_small(*args)
+
+    def counting_fused(*args):  # noqa: ANN002, ANN202
+        calls["small"] += 1
+        return original_fused(*args)
+
+    monkeypatch.setattr(fiedler_module, "_small", counting_small)
+    monkeypatch.setattr(kernels, "evaluate_small_kernel", counting_fused)
+    sc = load_scenario("multi_target_empty")
+    sc.team.n_robots = 20
+    sc.strategy.params["fiedler_method"] = method
+    b = build(sc, sc.seed)
+    simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=sc.sim.dt_s, max_steps=15,
+             rng=b.rng, collision_distance_m=sc.sim.collision_distance_m)  # fmt: skip
+    assert (calls["small"] > 0) == (method == "auto")

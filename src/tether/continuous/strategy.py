@@ -109,6 +109,10 @@ class ConnectivityStrategyParams(_Strict):
     keep_fraction: float = Field(default=0.5, ge=0, lt=1)
     safeguard: bool = True
     eigensolver: Literal["exact", "estimator"] = "exact"
+    #: exact lambda2 from the previous Fiedler vector: ``auto`` = the certified small
+    #: dense solver for 17-400 robots (LAPACK when it cannot certify); ``lapack`` = LAPACK
+    #: every sub-step (the same eigenpair; trajectories as before it, bit for bit)
+    fiedler_method: Literal["auto", "lapack"] = "auto"
     estimator: EstimatorConfig = Field(default_factory=EstimatorConfig)
     external: ExternalForce = Field(default_factory=ExternalForce)
 
@@ -296,10 +300,12 @@ class ConnectivityStrategy(Strategy):
 
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
         exact = self.params.eigensolver == "exact" or self.params.safeguard
+        method = self.params.fiedler_method
         # with the guess, the kernels solve the eigenpair in the weights' call (same bits)
-        graph = compute_weights(q, self.conn, self.obstacles, guess=self._nu if exact else None)
+        fused = exact and method == "auto"
+        graph = compute_weights(q, self.conn, self.obstacles, guess=self._nu if fused else None)
         if exact:
-            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm, method=method)
         else:
             lam, nu = np.inf, None
         return lam, (graph, lam, nu)
@@ -349,7 +355,8 @@ class ConnectivityStrategy(Strategy):
     def _observe(self, q: np.ndarray, graph: Any, lam: float, nu: np.ndarray | None) -> None:
         """Track the invariants (exact lambda2, distances, clearances) for ``metrics``."""
         if nu is None and self.n <= 500:
-            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
+            method = self.params.fiedler_method
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm, method=method)
         if np.isfinite(lam):
             self._min["lambda2"] = min(self._min["lambda2"], float(lam))
         if len(graph.pairs):

@@ -34,6 +34,7 @@ from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import smooth_step, smooth_step_log_derivative
 from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
+from tether.graph.fiedler import Method
 from tether.graph.warm import WarmState
 from tether.world.clearance import ObstacleIndex
 
@@ -87,13 +88,18 @@ class WeightedGraph:
         return laplacian_dense(self.n, self.pairs, self.weights)
 
     def fiedler(
-        self, *, guess: np.ndarray | None = None, state: WarmState | None = None
+        self,
+        *,
+        guess: np.ndarray | None = None,
+        state: WarmState | None = None,
+        method: Method = "auto",
     ) -> tuple[float, np.ndarray]:
         """Exact lambda2 and unit Fiedler vector of ``G_lambda`` (:func:`tether.graph.fiedler`).
 
-        ``guess`` (a previous Fiedler vector) fixes the sign of the result and,
-        above ``SUBSET_MAX_N`` robots, is the certified warm start; ``state`` then
-        keeps the warm solver's factorization between steps.
+        ``guess`` (a previous Fiedler vector) fixes the sign of the result and is the
+        certified warm start (``auto``: from 17 robots); ``state`` keeps the large-team
+        warm solver's factorization between steps; ``method`` as ``fiedler``'s
+        (``"lapack"``: LAPACK only up to 400 robots, the choice before the small solver).
         """
         w = self.weights
         lap = self._laplacian
@@ -103,7 +109,7 @@ class WeightedGraph:
             lap = laplacian_dense_kernel(self.n, self.pairs, w)
         done = self._small[1] if self._small is not None and guess is self._small[0] else None
         return fiedler(self.n, self.pairs, w, guess=guess, laplacian=lap, state=state,
-                       small_result=done)  # fmt: skip
+                       method=method, small_result=done)  # fmt: skip
 
 
 def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.ndarray:
