@@ -50,6 +50,7 @@ KERNEL_MODULES = (
     "graph/metrics_kernels.py",
     "graph/link_kernels.py",
     "paths/geodesic_kernels.py",
+    "graph/small_kernels.py",
     "recurrent/planning/steiner_kernels.py",
     "recurrent/planning/expgraph_kernels.py",
     "recurrent/planning/apx_kernels.py",
