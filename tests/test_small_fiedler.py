@@ -229,3 +229,13 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
     simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=sc.sim.dt_s, max_steps=15,
              rng=b.rng, collision_distance_m=sc.sim.collision_distance_m)  # fmt: skip
     assert (calls["small"] > 0) == (method == "auto")
+
+
+def test_multi_target_keeps_lapack_by_default_so_fig9_repeats() -> None:
+    """The Fig. 9 trials in the docs ran with LAPACK every sub-step; ``connectivity``
+    defaults to the small solver, ``multi_target`` must not (its trials would drift)."""
+    from tether.continuous.multi_target_params import MultiTargetParams
+    from tether.continuous.strategy import ConnectivityStrategyParams
+
+    assert MultiTargetParams().fiedler_method == "lapack"
+    assert ConnectivityStrategyParams().fiedler_method == "auto"
