@@ -44,7 +44,7 @@ import numpy as np  # noqa: E402
 from tether.comm import CommParams  # noqa: E402
 from tether.continuous.dynamics import semi_implicit_euler  # noqa: E402
 from tether.continuous.estimation import FiedlerEstimator  # noqa: E402
-from tether.continuous.gradient import connectivity_force, messages
+from tether.continuous.gradient import connectivity_force, exact_force, messages
 from tether.continuous.placement import safe_team  # noqa: E402
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
 from tether.continuous.weights import compute_weights
@@ -115,13 +115,14 @@ def bench(world: World, n: int, solver: str, rounds: int, repeat: int, loss: flo
         connectivity_force(graph, lam, messages(graph, nu), c)
 
     def step() -> None:
-        g = compute_weights(q, c, obs)
+        g = compute_weights(q, c, obs, guess=nu if est is None else None)  # as the strategy
         if est is None:
             l2, vec = g.fiedler(guess=nu, state=states["step"])
+            f = exact_force(g, l2, vec, c)  # as the strategy's exact path
         else:
             est.update(g, rounds)
             l2, vec = est.lambda2, est.vector
-        f = connectivity_force(g, l2, messages(g, vec), c)
+            f = connectivity_force(g, l2, messages(g, vec), c)
         semi_implicit_euler(q, v, f + ext, 1e-3, p.mass_kg, p.damping_ns_per_m)
 
     row = {

@@ -73,3 +73,24 @@ def test_apx_with_more_frontiers_per_subset_than_robots_is_exact(seed: int) -> N
                 best = max(best, sum(utilities.get(v, 0.0) for v in q))
     assert conf.utility == pytest.approx(best, abs=1e-9)
     assert conf.proven_optimal
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_relax_kernel_matches_numpy(seed: int) -> None:
+    """The compiled min-plus relaxation gives the numpy reference's integers."""
+    pytest.importorskip("numba")
+    from tether import jit
+    from tether.recurrent.planning.apx import _relax
+
+    rng = np.random.default_rng(seed)
+    n, cap = int(rng.integers(2, 60)), int(rng.integers(2, 12))
+    for dtype in (np.int16, np.int32):
+        d = rng.integers(0, cap + 1, size=(n, n)).astype(dtype)
+        g = rng.integers(0, 2 * cap + 1, size=(int(rng.integers(1, 40)), n)).astype(dtype)
+        with jit.using(False):
+            want = _relax(g, d, cap)
+        with jit.using(True):
+            got = _relax(g, d, cap)
+        assert got.dtype == want.dtype and np.array_equal(got, want)
+        brute = np.minimum((g[:, :, None].astype(int) + d[None]).min(axis=1), cap)
+        assert np.array_equal(want, brute)

@@ -327,7 +327,12 @@ def test_switch(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:  # noqa: ANN
 
 @pytest.mark.parametrize(
     ("name", "robots", "steps"),
-    [("multi_target_town", 12, 60), ("multi_target_office", 0, 60), ("connectivity_town", 0, 40)],
+    [
+        ("multi_target_town", 12, 60),
+        ("multi_target_office", 0, 60),
+        ("connectivity_town", 0, 40),
+        ("multi_target_empty", 24, 40),  # 24 robots: the small Fiedler solver, fused sub-step
+    ],
 )
 def test_whole_runs_are_the_same_with_and_without_kernels(name: str, robots: int, steps: int):
     """The kernels change nothing in a run: positions, velocities, lambda2, metrics."""

@@ -48,10 +48,15 @@ KERNEL_MODULES = (
     "graph/grid_kernels.py",
     "graph/metrics_kernels.py",
     "graph/link_kernels.py",
+    "paths/geodesic_kernels.py",
+    "graph/small_kernels.py",
     "recurrent/planning/steiner_kernels.py",
+    "recurrent/planning/expgraph_kernels.py",
+    "recurrent/planning/apx_kernels.py",
     "recurrent/planning/ilp_kernels.py",
     "silent/steering_kernels.py",
     "sensing/robots_kernels.py",
+    "sensing/depth_kernels.py",
     "sensing/draws_kernels.py",
 )
 

@@ -94,6 +94,19 @@ def force_kernel(grad, lam, lo, hi, gain):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
+def exact_force_kernel(  # noqa: ANN201, PLR0913
+    n, pairs, pair_factor, collision, dP_di, dP_dj, coll_pairs, coll_unit, coll_logd, nu, lam,
+    lo, hi, gain,
+):  # noqa: ANN001  # fmt: skip
+    """``connectivity_force(graph, lam, messages(graph, nu), params)`` in one call: the
+    edge energies, the gradient and the force by the three kernels above, in that order."""
+    energy = edge_energy_kernel(n, pairs, pair_factor, collision, nu)
+    grad = gradient_kernel(n, pairs, dP_di, dP_dj, coll_pairs, coll_unit, coll_logd, nu,
+                           collision, energy)  # fmt: skip
+    return force_kernel(grad, np.full(n, lam), lo, hi, gain)
+
+
+@njit(cache=True)
 def euler_kernel(q, v, force, h, mass, damping, box, margin):  # noqa: ANN001, ANN201
     """:func:`~tether.continuous.dynamics.semi_implicit_euler`, then
     :func:`~tether.continuous.dynamics.stay_inside` if ``box`` has two rows."""
@@ -171,6 +184,7 @@ def warm_up(q: np.ndarray, pairs: np.ndarray, graph: tuple, nu: np.ndarray) -> N
     energy = edge_energy_kernel(n, pairs, pf, coll, nu)
     grad = gradient_kernel(n, pairs, dP_di, dP_dj, cp, cu, cl, nu, coll, energy)
     force_kernel(grad, np.full(n, 0.1), 0.0, 0.5, 1.0)
+    exact_force_kernel(n, pairs, pf, coll, dP_di, dP_dj, cp, cu, cl, nu, 0.1, 0.0, 0.5, 1.0)
     box = np.array([[-10.0, -10.0, 0.0], [10.0, 10.0, 5.0]])
     for corners in (box, np.zeros((0, 3))):
         euler_kernel(q, q, q, 0.01, 1.0, 2.0, corners, 0.75)

@@ -123,3 +123,23 @@ def connectivity_force(
         return force_kernel(grad, np.ascontiguousarray(lam), params.lambda2_min,
                             params.lambda2_null, params.potential_gain)  # fmt: skip
     return -potential_slope(lam, params)[:, None] * grad
+
+
+def exact_force(
+    graph: WeightedGraph, lambda2: float, nu: np.ndarray, params: ConnectivityParams
+) -> np.ndarray:
+    """``connectivity_force(graph, lambda2, messages(graph, nu), params)``, ``(n, dim)``.
+
+    The force of the exact eigenpair (every robot's messages from the same ``nu``); with
+    the kernels one compiled call, the same bits as the chain.
+    """
+    if jit.enabled() and graph.dP_di.ndim == 2:
+        from tether.continuous.force_kernels import exact_force_kernel
+
+        return exact_force_kernel(
+            graph.n, graph.pairs, graph.pair_factor, graph.collision, graph.dP_di, graph.dP_dj,
+            graph.coll_pairs, graph.coll_unit, graph.coll_logd,
+            np.ascontiguousarray(nu, dtype=float), float(lambda2), params.lambda2_min,
+            params.lambda2_null, params.potential_gain,
+        )  # fmt: skip
+    return connectivity_force(graph, lambda2, messages(graph, nu), params)

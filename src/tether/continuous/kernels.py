@@ -15,12 +15,15 @@ from __future__ import annotations
 
 import math
 import time
+from functools import cache
 
 import numpy as np
 from numba import njit
 
 from tether import jit
+from tether.graph import small
 from tether.graph.kernels import laplacian_dense_kernel
+from tether.graph.small_kernels import small_fiedler_kernel
 from tether.world.clearance_kernels import segments_nearest_cached
 
 #: below this many robots the pairs are found by testing all of them
@@ -314,10 +317,12 @@ def weights_kernel(  # noqa: ANN201, PLR0913
     return pair_factor, dP_di, dP_dj, clear, collision, coll_pairs, coll_unit, coll_logd
 
 
+@cache
 def no_obstacles(dim: int) -> tuple:
     """:func:`evaluate_kernel`'s obstacle arguments for a world without obstacle points.
 
-    Arrays of the types an obstacle index passes, so that both share one compilation.
+    Arrays of the types an obstacle index passes, so that both share one compilation
+    (made once per dimension: they are read only where there are obstacles).
     """
     i, f1, f2 = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, dim))
     tree = (f2, i, f2, f2, i, i, i, f2, f1)
@@ -385,6 +390,23 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
     return pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added
 
 
+@njit(cache=True)
+def evaluate_small_kernel(  # noqa: ANN201, PLR0913
+    q, rs_inner, rs, ro, ro_outer, rc, rc_outer, obstacles, points, tree, table, used, slack,
+    field, order, guess, small,
+):  # noqa: ANN001  # fmt: skip
+    """:func:`evaluate_kernel` with the Laplacian, then :func:`~tether.graph.small_kernels.
+    small_fiedler_kernel` on it from ``guess`` with the settings ``small``: a sub-step's
+    weights and eigenpair in one call, the same bits as two. Returns the former's tuple
+    and the latter's ``(status, lambda2, vector)`` (-1: the clearance table must grow)."""
+    out = evaluate_kernel(q, rs_inner, rs, ro, ro_outer, rc, rc_outer, True, obstacles, points,
+                          tree, table, used, slack, field, order)  # fmt: skip
+    if out[-1] < 0:
+        return out, -1, 0.0, guess.copy()
+    status, lam, vec, _, _ = small_fiedler_kernel(out[10], guess, *small)
+    return out, status, lam, vec
+
+
 def warm_up() -> float:
     """Compile or load (from numba's cache) every kernel of the continuous strategies.
 
@@ -433,39 +455,29 @@ def warm_up() -> float:
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
-    from tether.continuous.round_kernels import warm_up as rounds_warm_up
+        evaluate_small_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, obs is not None, points_, tree,
+                              table, used, 0.25, fld, 1, nu, small.SETTINGS)  # fmt: skip
+    # every other kernel module's warm-up (imports here: numba only once asked for)
+    from tether.comm_kernels import warm_up as comm
+    from tether.continuous.round_kernels import warm_up as rounds
+    from tether.graph.grid_kernels import warm_up as grid
+    from tether.graph.link_kernels import warm_up as links
+    from tether.graph.metrics_kernels import warm_up as metrics
+    from tether.paths.astar_kernels import warm_up as astar
+    from tether.paths.geodesic_kernels import warm_up as geodesic
+    from tether.recurrent.planning.apx_kernels import warm_up as apx
+    from tether.recurrent.planning.expgraph_kernels import warm_up as expgraph
+    from tether.recurrent.planning.ilp_kernels import warm_up as ilp
+    from tether.recurrent.planning.steiner_kernels import warm_up as steiner
+    from tether.sensing.depth_kernels import warm_up as depth
+    from tether.sensing.draws_kernels import warm_up as draws
+    from tether.sensing.robots_kernels import warm_up as sensing
+    from tether.silent.steering_kernels import warm_up as steering
 
-    rounds_warm_up()
-    from tether.comm_kernels import warm_up as comm_warm_up
-
-    comm_warm_up()
-    from tether.recurrent.planning.steiner_kernels import warm_up as steiner_warm_up
-
-    steiner_warm_up()
-    from tether.recurrent.planning.ilp_kernels import warm_up as ilp_warm_up
-
-    ilp_warm_up()
-    from tether.silent.steering_kernels import warm_up as steering_warm_up
-
-    steering_warm_up()
-    from tether.sensing.robots_kernels import warm_up as sensing_warm_up
-
-    sensing_warm_up()
-    from tether.sensing.draws_kernels import warm_up as draws_warm_up
-
-    draws_warm_up()
-    from tether.graph.grid_kernels import warm_up as grid_warm_up
-
-    grid_warm_up()
-    from tether.graph.metrics_kernels import warm_up as metrics_warm_up
-
-    metrics_warm_up()
-    from tether.paths.astar_kernels import warm_up as astar_warm_up
-
-    astar_warm_up()
-    from tether.graph.link_kernels import warm_up as link_warm_up
-
-    link_warm_up()
+    for module_warm_up in (rounds, comm, steiner, ilp, steering, sensing, draws, grid, metrics,
+                           astar, links, geodesic, expgraph, depth, apx):  # fmt: skip
+        module_warm_up()
+    small_fiedler_kernel(np.array([[1.0, -1.0], [-1.0, 1.0]]), nu[:2].copy(), *small.SETTINGS)
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)
     return seconds

@@ -44,6 +44,10 @@ class MultiTargetParams(ConnectivityStrategyParams):
     """Parameters of ``multi_target``: Table 2 (``preset``) plus the open choices."""
 
     targets: TargetsConfig = Field(default_factory=TargetsConfig)
+    #: LAPACK every sub-step by default, so that the Fig. 9 campaign's trials repeat bit for
+    #: bit (docs/multi_target.md); ``auto`` (the certified small solver) is faster and
+    #: gives the same eigenpair to rounding, but trajectories that differ in the last bits
+    fiedler_method: Literal["auto", "lapack"] = "lapack"
     r_grid_m: float = Field(default=0.75, gt=0)
     sigma: float = Field(default=3.0, ge=1)
     v_cruise_mps: float = Field(default=3.0, gt=0)

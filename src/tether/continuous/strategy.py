@@ -33,7 +33,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.dynamics import IntegratorParams, integrate
 from tether.continuous.estimation import EstimatorParams, FiedlerEstimator, estimate_errors
-from tether.continuous.gradient import connectivity_force, messages
+from tether.continuous.gradient import connectivity_force, exact_force, messages
 from tether.continuous.params import TABLE2, ConnectivityParams
 from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
@@ -109,6 +109,10 @@ class ConnectivityStrategyParams(_Strict):
     keep_fraction: float = Field(default=0.5, ge=0, lt=1)
     safeguard: bool = True
     eigensolver: Literal["exact", "estimator"] = "exact"
+    #: exact lambda2 from the previous Fiedler vector: ``auto`` = the certified small
+    #: dense solver for 17-400 robots (LAPACK when it cannot certify); ``lapack`` = LAPACK
+    #: every sub-step (the same eigenpair; trajectories as before it, bit for bit)
+    fiedler_method: Literal["auto", "lapack"] = "auto"
     estimator: EstimatorConfig = Field(default_factory=EstimatorConfig)
     external: ExternalForce = Field(default_factory=ExternalForce)
 
@@ -295,9 +299,13 @@ class ConnectivityStrategy(Strategy):
     # ----------------------------------------------------------------- evaluation
 
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
-        graph = compute_weights(q, self.conn, self.obstacles)
-        if self.params.eigensolver == "exact" or self.params.safeguard:
-            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
+        exact = self.params.eigensolver == "exact" or self.params.safeguard
+        method = self.params.fiedler_method
+        # with the guess, the kernels solve the eigenpair in the weights' call (same bits)
+        fused = exact and method == "auto"
+        graph = compute_weights(q, self.conn, self.obstacles, guess=self._nu if fused else None)
+        if exact:
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm, method=method)
         else:
             lam, nu = np.inf, None
         return lam, (graph, lam, nu)
@@ -306,7 +314,7 @@ class ConnectivityStrategy(Strategy):
         graph, lam, nu = cache
         if self.estimator is None:
             self._nu = nu
-            return connectivity_force(graph, lam, messages(graph, nu), self.conn)
+            return exact_force(graph, lam, nu, self.conn)
         est = self.estimator
         est.update(graph, self.params.estimator.rounds_per_substep)
         if nu is not None:
@@ -347,7 +355,8 @@ class ConnectivityStrategy(Strategy):
     def _observe(self, q: np.ndarray, graph: Any, lam: float, nu: np.ndarray | None) -> None:
         """Track the invariants (exact lambda2, distances, clearances) for ``metrics``."""
         if nu is None and self.n <= 500:
-            lam, nu = graph.fiedler(guess=self._nu, state=self._warm)
+            method = self.params.fiedler_method
+            lam, nu = graph.fiedler(guess=self._nu, state=self._warm, method=method)
         if np.isfinite(lam):
             self._min["lambda2"] = min(self._min["lambda2"], float(lam))
         if len(graph.pairs):

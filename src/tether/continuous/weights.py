@@ -33,7 +33,8 @@ import numpy as np
 from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import smooth_step, smooth_step_log_derivative
-from tether.graph import SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within
+from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
+from tether.graph.fiedler import Method
 from tether.graph.warm import WarmState
 from tether.world.clearance import ObstacleIndex
 
@@ -64,6 +65,8 @@ class WeightedGraph:
     # the kernels' W and dense Laplacian, when they computed them (same bits)
     _weights: np.ndarray | None = field(default=None, repr=False, compare=False)
     _laplacian: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # (guess, (status, lambda2, vector)) of the small Fiedler solver, run by the same kernel
+    _small: tuple | None = field(default=None, repr=False, compare=False)
 
     @property
     def weights(self) -> np.ndarray:
@@ -85,13 +88,18 @@ class WeightedGraph:
         return laplacian_dense(self.n, self.pairs, self.weights)
 
     def fiedler(
-        self, *, guess: np.ndarray | None = None, state: WarmState | None = None
+        self,
+        *,
+        guess: np.ndarray | None = None,
+        state: WarmState | None = None,
+        method: Method = "auto",
     ) -> tuple[float, np.ndarray]:
         """Exact lambda2 and unit Fiedler vector of ``G_lambda`` (:func:`tether.graph.fiedler`).
 
-        ``guess`` (a previous Fiedler vector) fixes the sign of the result and,
-        above ``SUBSET_MAX_N`` robots, is the certified warm start; ``state`` then
-        keeps the warm solver's factorization between steps.
+        ``guess`` (a previous Fiedler vector) fixes the sign of the result and is the
+        certified warm start (``auto``: from 17 robots); ``state`` keeps the large-team
+        warm solver's factorization between steps; ``method`` as ``fiedler``'s
+        (``"lapack"``: LAPACK only up to 400 robots, the choice before the small solver).
         """
         w = self.weights
         lap = self._laplacian
@@ -99,7 +107,9 @@ class WeightedGraph:
             from tether.graph.kernels import laplacian_dense_kernel
 
             lap = laplacian_dense_kernel(self.n, self.pairs, w)
-        return fiedler(self.n, self.pairs, w, guess=guess, laplacian=lap, state=state)
+        done = self._small[1] if self._small is not None and guess is self._small[0] else None
+        return fiedler(self.n, self.pairs, w, guess=guess, laplacian=lap, state=state,
+                       method=method, small_result=done)  # fmt: skip
 
 
 def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.ndarray:
@@ -122,6 +132,7 @@ def compute_weights(
     params: ConnectivityParams,
     obstacles: ObstacleIndex | None = None,
     pairs: np.ndarray | None = None,
+    guess: np.ndarray | None = None,
 ) -> WeightedGraph:
     """The weighted graph ``G_lambda`` of the team (App. A, steps 1-2).
 
@@ -136,6 +147,11 @@ def compute_weights(
     pairs
         Optional precomputed pairs within ``Rs`` (``i < j``); found with a
         k-d tree otherwise.
+    guess
+        The Fiedler vector the caller will pass to :meth:`WeightedGraph.fiedler`: with
+        the kernels, a team of ``DENSE_MAX_N < n <= SUBSET_MAX_N`` robots gets its
+        eigenpair (:mod:`tether.graph.small`) in the same compiled call as its weights;
+        ``fiedler(guess=guess)`` then returns it (the same bits as computing it there).
 
     With :func:`tether.jit.enabled`, the kernels of :mod:`tether.continuous.kernels`
     compute the same arrays (to the last bit) without numpy's per-call overhead.
@@ -146,7 +162,7 @@ def compute_weights(
         # branch gives the same numbers (up to the sign of zeros), at twice the cost
         obstacles = None
     if jit.enabled():
-        return _compute_weights_kernel(q, params, obstacles, pairs)
+        return _compute_weights_kernel(q, params, obstacles, pairs, guess)
     return _compute_weights_reference(q, params, obstacles, pairs)
 
 
@@ -155,6 +171,7 @@ def _compute_weights_kernel(
     params: ConnectivityParams,
     obstacles: ObstacleIndex | None,
     pairs: np.ndarray | None,
+    guess: np.ndarray | None = None,
 ) -> WeightedGraph:
     """:func:`compute_weights` by the kernels of :mod:`tether.continuous.kernels` (same bits)."""
     from tether.continuous import kernels as k
@@ -162,7 +179,7 @@ def _compute_weights_kernel(
     q = np.ascontiguousarray(q)
     n = len(q)
     if pairs is None:
-        return _evaluate_kernel(q, params, obstacles)
+        return _evaluate_kernel(q, params, obstacles, guess)
     else:
         pairs = k.pairs_below(q, np.asarray(pairs, dtype=np.int64).reshape(-1, 2), params.rs_m)
     has_obstacles = obstacles is not None and len(pairs) > 0
@@ -185,24 +202,38 @@ _NO_CLEARANCE = (np.zeros(0), np.zeros(0), np.zeros((0, 3)))
 
 
 def _evaluate_kernel(
-    q: np.ndarray, params: ConnectivityParams, obstacles: ObstacleIndex | None
+    q: np.ndarray,
+    params: ConnectivityParams,
+    obstacles: ObstacleIndex | None,
+    guess: np.ndarray | None = None,
 ) -> WeightedGraph:
-    """Pairs, clearance, weights, ``W`` and the dense Laplacian in one kernel call."""
-    from tether.continuous.kernels import evaluate_kernel, no_obstacles
+    """Pairs, clearance, weights, ``W``, the dense Laplacian (and with ``guess`` the small
+    solver's eigenpair) in one kernel call."""
+    from tether.continuous.kernels import evaluate_kernel, evaluate_small_kernel, no_obstacles
     from tether.world.clearance import einsum_order
 
     n, dim = q.shape
     has = obstacles is not None and obstacles.tree is not None and n > 1
     estimate = min(n * (n - 1) // 2, 32 * n)
     slack = obstacles.cache_slack_m if has else 0.0
+    radii = (params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
+             params.rc_outer_m)  # fmt: skip
+    fused = guess is not None and DENSE_MAX_N < n <= SUBSET_MAX_N and len(guess) == n
+    if fused:
+        guess = np.ascontiguousarray(guess, dtype=float)
+    eigen = None
     for _ in range(2):
         points, tree, table, used, fld = obstacles.kernel_state(estimate) if has else \
             no_obstacles(dim)  # fmt: skip
-        out = evaluate_kernel(
-            q, params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
-            params.rc_outer_m, n <= SUBSET_MAX_N, has, points, tree, table, used, slack, fld,
-            einsum_order(),
-        )  # fmt: skip
+        if fused:
+            out, status, lam, vec = evaluate_small_kernel(
+                q, *radii, has, points, tree, table, used, slack, fld, einsum_order(), guess,
+                small.SETTINGS,
+            )  # fmt: skip
+            eigen = (guess, (status, lam, vec))
+        else:
+            out = evaluate_kernel(q, *radii, n <= SUBSET_MAX_N, has, points, tree, table, used,
+                                  slack, fld, einsum_order())  # fmt: skip
         if out[-1] >= 0:
             break
         estimate = len(out[8])
@@ -211,7 +242,7 @@ def _evaluate_kernel(
     if has:
         obstacles.kernel_added(added)
     return WeightedGraph(n, pairs, pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit,
-                         coll_logd, w, lap if n <= SUBSET_MAX_N else None)  # fmt: skip
+                         coll_logd, w, lap if n <= SUBSET_MAX_N else None, eigen)  # fmt: skip
 
 
 def _compute_weights_reference(

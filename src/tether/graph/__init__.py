@@ -7,9 +7,11 @@ here is plain arrays and sparse matrices, so that 10,000-robot teams stay cheap.
 * :mod:`tether.graph.structure` -- neighbour pairs (k-d tree), adjacency,
   Laplacians, connected components, stretch;
 * :mod:`tether.graph.fiedler` -- lambda2 and the Fiedler vector, one public
-  function with ``method=`` dispatch (dense, subset, sparse, warm);
+  function with ``method=`` dispatch (dense, subset, sparse, warm, small);
 * :mod:`tether.graph.warm` -- the certified warm-started solver for large teams,
-  on :mod:`tether.graph.links` (a Laplacian kept as its links).
+  on :mod:`tether.graph.links` (a Laplacian kept as its links);
+* :mod:`tether.graph.small` -- the certified warm-started dense solver for teams of
+  17-400 robots (compiled in :mod:`tether.graph.small_kernels`, same bits).
 """
 
 from tether.graph.fiedler import DENSE_MAX_N, SUBSET_MAX_N, algebraic_connectivity, fiedler

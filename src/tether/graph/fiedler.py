@@ -16,13 +16,15 @@ import scipy.linalg
 import scipy.linalg.lapack
 from scipy.sparse.linalg import eigsh
 
+from tether import jit
+from tether.graph import small
 from tether.graph.structure import components, laplacian, laplacian_dense
 from tether.graph.warm import WarmState, warm_fiedler
 
-Method = Literal["auto", "dense", "subset", "sparse", "warm"]
+Method = Literal["auto", "lapack", "dense", "subset", "sparse", "warm", "small"]
 
 DENSE_MAX_N = 16  # "auto": full numpy eigh up to this size
-SUBSET_MAX_N = 400  # "auto": only the second eigenpair (LAPACK syevr) up to this size
+SUBSET_MAX_N = 400  # "auto": the small solver from a guess, else syevr, up to this size
 
 #: lambda2 below this (relative to the largest degree) is checked against the components,
 #: so that a disconnected graph gets exactly 0 rather than rounding noise
@@ -61,6 +63,24 @@ def _subset(
     return max(float(vals[0]), 0.0), vecs[:, 0]
 
 
+def _small(
+    lap: np.ndarray, guess: np.ndarray, done: tuple | None
+) -> tuple[float, np.ndarray] | None:
+    """:func:`tether.graph.small.small_fiedler` (compiled when kernels run: same bits),
+    or its ``(status, lambda2, vector)`` computed already (``done``)."""
+    if done is not None:
+        status, lam, vec = done
+    elif jit.enabled():
+        from tether.graph.small_kernels import small_fiedler_kernel
+
+        status, lam, vec, _, _ = small_fiedler_kernel(
+            lap, np.ascontiguousarray(guess, dtype=float), *small.SETTINGS
+        )
+    else:
+        status, lam, vec, _, _ = small.small_fiedler(lap, guess)
+    return (float(lam), vec) if status == small.OK else None
+
+
 def _sparse(n: int, pairs: np.ndarray, w: np.ndarray | None) -> tuple[float, np.ndarray]:
     if w is not None:  # explicit zeros would only add fill to the factorization
         keep = w != 0
@@ -91,6 +111,7 @@ def fiedler(
     guess: np.ndarray | None = None,
     laplacian: np.ndarray | None = None,
     state: WarmState | None = None,
+    small_result: tuple[int, float, np.ndarray] | None = None,
 ) -> tuple[float, np.ndarray]:
     """lambda2 and a unit Fiedler vector of a (weighted) graph.
 
@@ -108,8 +129,13 @@ def fiedler(
         ``"warm"``: the certified inverse iteration of
         :func:`tether.graph.warm.warm_fiedler` from ``guess``, falling back
         to ``"sparse"`` when it cannot certify its answer.
-        ``"auto"``: ``dense`` up to ``DENSE_MAX_N`` nodes, ``subset`` up to
+        ``"small"``: the certified inverse iteration of
+        :func:`tether.graph.small.small_fiedler` on the dense Laplacian from
+        ``guess``, falling back to ``"subset"`` when it cannot certify its answer.
+        ``"lapack"``: ``dense`` up to ``DENSE_MAX_N`` nodes, ``subset`` up to
         ``SUBSET_MAX_N``, then ``warm`` when a guess is given, else ``sparse``.
+        ``"auto"``: as ``"lapack"``, but ``small`` instead of ``subset`` when a
+        guess is given (the same eigenpair, certified; not the same last bits).
     guess
         A previous Fiedler vector: it fixes the sign of the result (so that a
         warm estimator or a finite-difference test sees a continuous vector)
@@ -120,6 +146,10 @@ def fiedler(
     state
         ``"warm"`` only: a :class:`tether.graph.warm.WarmState` that keeps the
         solver's factorization from one call to the next (one per run).
+    small_result
+        ``(status, lambda2, vector)`` of :func:`tether.graph.small.small_fiedler` for
+        exactly ``laplacian`` and ``guess``, if a caller's kernel computed it already
+        (a fused sub-step); used where ``"small"`` would run it.
 
     Returns
     -------
@@ -132,11 +162,11 @@ def fiedler(
     w = None if weights is None else np.asarray(weights, dtype=float)
     if n < 2:
         return 0.0, np.zeros(n)
-    if method == "auto":
+    if method in ("auto", "lapack"):
         if n <= DENSE_MAX_N:
             method = "dense"
         elif n <= SUBSET_MAX_N:
-            method = "subset"
+            method = "small" if method == "auto" and guess is not None else "subset"
         else:
             method = "warm" if guess is not None else "sparse"
     warm = None
@@ -153,15 +183,22 @@ def fiedler(
         if vec is not None:
             return 0.0, vec
     lap = None
-    if method in ("dense", "subset"):
+    if method in ("dense", "subset", "small"):
         lap = laplacian_dense(n, pairs, w) if laplacian is None else laplacian
+    if method == "small":
+        if guess is None:
+            raise ValueError("method 'small' needs a guess (a previous Fiedler vector)")
+        warm = _small(lap, guess, small_result)
+        method = "subset" if warm is None else "warm"
+    if method in ("dense", "subset"):
         lam, vec = _dense(n, pairs, w, lap) if method == "dense" else _subset(n, pairs, w, lap)
     elif method == "sparse":
         lam, vec = _sparse(n, pairs, w)
     elif method == "warm":
         lam, vec = warm
     else:
-        raise ValueError(f"unknown method {method!r}; expected auto, dense, subset, sparse or warm")
+        names = "auto, lapack, dense, subset, sparse, warm or small"
+        raise ValueError(f"unknown method {method!r}; expected {names}")
     if (
         method != "sparse"
         and _maybe_tiny(lam, pairs, w, lap)
@@ -188,7 +225,7 @@ def _maybe_tiny(
     """
     if lap is None or len(pairs) == 0:
         return True
-    return lam <= _TINY_REL * float(np.max(np.diagonal(lap))) * (1.0 + 1e-6)
+    return lam <= _TINY_REL * float(lap.diagonal().max()) * (1.0 + 1e-6)
 
 
 def _max_degree(n: int, pairs: np.ndarray, w: np.ndarray | None) -> float:

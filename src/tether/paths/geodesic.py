@@ -7,17 +7,25 @@ vertices, and robots travel along known free space. A coarse cell (a block of
 known free -- a conservative inflation that also keeps a robot body away from
 walls. Coarse cells are joined 8-connected (diagonals only when both
 orthogonal neighbours are traversable, so no corner is cut), with Euclidean
-step costs in fine cells; distances come from ``scipy.sparse.csgraph.dijkstra``
-from many sources at once.
+step costs in fine cells. Distances and paths come from
+``scipy.sparse.csgraph.dijkstra`` (the reference) or, with the compiled kernels
+on (:mod:`tether.jit`), from a bucket-queue Dijkstra on the grid itself
+(:mod:`tether.paths.geodesic_kernels`): the same distances bit for bit and the same
+paths (:class:`Geodesics`), about five times faster.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy import ndimage
+from scipy.sparse.csgraph import dijkstra
 
-__all__ = ["CoarseGrid"]
+from tether import jit
+
+__all__ = ["CoarseGrid", "Geodesics"]
 
 
 class CoarseGrid:
@@ -51,6 +59,21 @@ class CoarseGrid:
         node[cells[:, 0], cells[:, 1]] = np.arange(len(cells))
         self.node = node
         self.cells = cells
+        self.n_nodes = len(cells)
+        self._graph: sp.csr_matrix | None = None
+        self._components: np.ndarray | None = None
+
+    @property
+    def graph(self) -> sp.csr_matrix:
+        """The weighted adjacency (CSR, symmetric) of the nodes, built on first use."""
+        if self._graph is None:
+            self._graph = self._build_graph()
+        return self._graph
+
+    def _build_graph(self) -> sp.csr_matrix:
+        """Edges of the 8-connected grid, each stored in both directions with one weight."""
+        blocks, node, f = self.traversable, self.node, self.factor
+        cx, cy = self.shape
         rows, cols, vals = [], [], []
         for dx, dy in ((1, 0), (0, 1), (1, 1), (1, -1)):
             # cell (x, y) -> (x + dx, y + dy), both traversable
@@ -69,10 +92,8 @@ class CoarseGrid:
         r = np.concatenate(rows)
         c = np.concatenate(cols)
         v = np.concatenate(vals)
-        n = len(cells)
-        self.n_nodes = n
-        self.graph = sp.csr_matrix((np.r_[v, v], (np.r_[r, c], np.r_[c, r])), shape=(n, n))
-        self._components: np.ndarray | None = None
+        n = self.n_nodes
+        return sp.csr_matrix((np.r_[v, v], (np.r_[r, c], np.r_[c, r])), shape=(n, n))
 
     # ------------------------------------------------------------------ lookups
     def node_at(self, points: np.ndarray) -> np.ndarray:
@@ -91,9 +112,16 @@ class CoarseGrid:
 
     @property
     def components(self) -> np.ndarray:
-        """Connected-component label of every node."""
+        """Connected-component label of every node, numbered by their first node.
+
+        ``scipy.sparse.csgraph.connected_components``' labels of :attr:`graph`: a
+        diagonal edge needs both orthogonal cells, so the components are the
+        4-connected ones of :attr:`traversable`, which ``ndimage.label`` numbers in
+        raster order -- the order of the nodes' ids, as scipy does.
+        """
         if self._components is None:
-            _, self._components = connected_components(self.graph, directed=False)
+            lab, _ = ndimage.label(self.traversable)
+            self._components = lab[self.cells[:, 0], self.cells[:, 1]].astype(np.int32) - 1
         return self._components
 
     def nearest_node(self, point: np.ndarray, radius_cells: float = np.inf) -> int:
@@ -108,18 +136,91 @@ class CoarseGrid:
     def distances(
         self, sources: np.ndarray, predecessors: bool = False
     ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-        """Geodesic distances (fine cells) from each source node to every node, ``(k, n)``."""
+        """Geodesic distances (fine cells) from each source node to every node, ``(k, n)``.
+
+        With ``predecessors`` also scipy's predecessor matrix (:meth:`geodesics` gives
+        the same paths faster). The distances are the same bits either way.
+        """
         sources = np.atleast_1d(np.asarray(sources, dtype=np.intp))
         if len(sources) == 0:
             empty = np.empty((0, self.n_nodes))
             return (empty, empty.astype(np.intp)) if predecessors else empty
-        return dijkstra(
-            self.graph, directed=False, indices=sources, return_predecessors=predecessors
-        )
+        if not predecessors and jit.enabled():
+            return self._kernel(sources, False)[0]
+        return self._scipy(sources, predecessors)
+
+    def geodesics(self, sources: np.ndarray) -> Geodesics:
+        """Distances from each source node and the paths to any node (:class:`Geodesics`).
+
+        The paths are those of scipy's predecessors (:meth:`distances`), whichever
+        implementation runs (:mod:`tether.jit`).
+        """
+        sources = np.atleast_1d(np.asarray(sources, dtype=np.intp))
+        if len(sources) and jit.enabled():
+            dist, pred, tie = self._kernel(sources, True)
+        else:
+            dist, pred = self.distances(sources, predecessors=True)
+            tie = np.zeros(pred.shape, dtype=bool)
+        return Geodesics(self, sources, dist, pred, tie)
+
+    def _scipy(self, sources: np.ndarray, predecessors: bool) -> np.ndarray | tuple:
+        """The reference: scipy's Dijkstra (Fibonacci heap) on :attr:`graph`.
+
+        ``directed=True`` on the symmetric graph gives the same result as
+        ``directed=False`` (which scans every edge twice, the second time without
+        effect) in half the time.
+        """
+        return dijkstra(self.graph, directed=True, indices=sources,
+                        return_predecessors=predecessors)  # fmt: skip
+
+    def _kernel(self, sources: np.ndarray, predecessors: bool) -> tuple[np.ndarray, ...]:
+        """:func:`~tether.paths.geodesic_kernels.grid_dijkstra_kernel` in node ids."""
+        from tether.paths.geodesic_kernels import grid_dijkstra_kernel
+
+        cx, cy = self.shape
+        padded = np.zeros((cx + 2, cy + 2), dtype=bool)
+        padded[1:-1, 1:-1] = self.traversable
+        flat = (self.cells[:, 0] + 1) * (cy + 2) + self.cells[:, 1] + 1
+        w_orth, w_diag = self.factor * 1.0, self.factor * np.sqrt(2.0)  # as _build_graph
+        return grid_dijkstra_kernel(padded, flat, w_orth, w_diag, sources, predecessors)
 
     def path(self, pred_row: np.ndarray, target: int) -> np.ndarray:
         """Fine waypoints from the Dijkstra source to ``target`` (source included)."""
-        nodes = [int(target)]
-        while pred_row[nodes[-1]] >= 0:
-            nodes.append(int(pred_row[nodes[-1]]))
-        return self.centre(np.asarray(nodes[::-1]))
+        return self.centre(_trace(pred_row, target))
+
+
+def _trace(pred_row: np.ndarray, target: int) -> np.ndarray:
+    """Nodes from the source of ``pred_row`` to ``target`` (both included)."""
+    nodes = [int(target)]
+    while pred_row[nodes[-1]] >= 0:
+        nodes.append(int(pred_row[nodes[-1]]))
+    return np.asarray(nodes[::-1], dtype=np.intp)
+
+
+@dataclass
+class Geodesics:
+    """Shortest paths from ``sources`` (node ids) of a :class:`CoarseGrid`.
+
+    ``dist`` and ``pred`` are ``(k, n)`` like :meth:`CoarseGrid.distances`' output.
+    ``tie[i, x]``: ``pred[i, x]`` was not decided by the distances alone (two
+    neighbours with the same smallest label lead to ``x``,
+    :mod:`tether.paths.geodesic_kernels`); a path through such a node is taken from
+    scipy's predecessors of that source instead, so :meth:`path` always returns
+    scipy's path.
+    """
+
+    grid: CoarseGrid
+    sources: np.ndarray
+    dist: np.ndarray
+    pred: np.ndarray
+    tie: np.ndarray
+
+    def path(self, row: int, target: int) -> np.ndarray:
+        """Fine waypoints from source ``row`` to node ``target`` (the source included)."""
+        nodes = _trace(self.pred[row], target)
+        if self.tie[row, nodes].any():
+            _, pred = self.grid.distances(self.sources[row : row + 1], predecessors=True)
+            self.pred[row] = pred[0]
+            self.tie[row] = False
+            nodes = _trace(self.pred[row], target)
+        return self.grid.centre(nodes)

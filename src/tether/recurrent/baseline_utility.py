@@ -42,8 +42,7 @@ from typing import Any
 import numpy as np
 
 from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
-from tether.recurrent.planning.expgraph import snap_cluster, window_counts
-from tether.recurrent.planning.frontiers import frontier_clusters
+from tether.recurrent.planning.expgraph import frontier_nodes, window_counts
 
 __all__ = ["UtilityStrategy"]
 
@@ -145,10 +144,10 @@ class UtilityStrategy:
         for s in src:
             allowed |= comp == comp[s]
         nodes = []
-        for cluster in frontier_clusters(
-            known, sim.occupied, sim.cfg.min_cluster_cells, sim.cfg.max_cluster_extent
-        ):
-            nd = snap_cluster(cluster, coarse, allowed)
+        for nd in frontier_nodes(
+            known, sim.occupied, coarse, allowed, sim.cfg.min_cluster_cells,
+            sim.cfg.max_cluster_extent,
+        ):  # fmt: skip
             if nd >= 0 and nd not in nodes:
                 nodes.append(nd)
         if self.coordination == "greedy":
@@ -166,8 +165,8 @@ class UtilityStrategy:
         nodes_arr = np.asarray(nodes)
         pos = coarse.centre(nodes_arr)
         gain = window_counts(~known, pos, int(round(sim.cfg.sensor_range_cells)))
-        dist, pred = coarse.distances(src, predecessors=True)
-        d = dist[:, nodes_arr]
+        geo = coarse.geodesics(src)
+        d = geo.dist[:, nodes_arr]
         util = gain[None, :] / np.maximum(d, 1.0) ** 2  # eq. (1) per robot
         util[~np.isfinite(d)] = -1.0
         if self.coordination == "none":  # each robot on its own: its best frontier
@@ -176,7 +175,7 @@ class UtilityStrategy:
                 if util[k, f] < 0:
                     self._exhaust(sim, r)
                     continue
-                path = np.vstack([sim.pos[r : r + 1], coarse.path(pred[k], int(nodes_arr[f]))])
+                path = np.vstack([sim.pos[r : r + 1], geo.path(k, int(nodes_arr[f]))])
                 sim.assign(r, pos[f], GoalKind.FRONTIER, path)
                 self.choices += 1
             return
@@ -190,7 +189,7 @@ class UtilityStrategy:
                 break
             k, f = free_r[i], cols[j]
             r = members[k]
-            path = np.vstack([sim.pos[r : r + 1], coarse.path(pred[k], int(nodes_arr[f]))])
+            path = np.vstack([sim.pos[r : r + 1], geo.path(k, int(nodes_arr[f]))])
             sim.assign(r, pos[f], GoalKind.FRONTIER, path)
             self.choices += 1
             free_r.remove(k)

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from tether.graph import components
+from tether.paths.geodesic import Geodesics
 from tether.recurrent.exploration.sim import ExplorationSim, GoalKind
 from tether.recurrent.planning.configuration import check_configuration, optimal_configuration
 from tether.recurrent.planning.deployment import optimal_deployment
@@ -283,7 +284,7 @@ class RecurrentStrategy:
         nonready = np.flatnonzero(~ready & sim.alive)
         fixed = {int(goal_v[r]) for r in nonready if goal_v[r] > 0}
         movable = np.flatnonzero(ready | sim.connected)  # constraint (IV)
-        dist, pred = self._distances(graph, sim.pos[movable])
+        dist, geo = self._distances(graph, sim.pos[movable])
         row = {int(r): k for k, r in enumerate(movable)}
         ready_rows = [row[int(r)] for r in ready_ids]
         utilities = frontier_utilities(graph, dist[ready_rows], exclude=fixed)
@@ -352,7 +353,7 @@ class RecurrentStrategy:
                 else GoalKind.RELAY
             )
             k = row[r]
-            path = graph.coarse.path(pred[k], int(graph.nodes[v]))
+            path = geo.path(k, int(graph.nodes[v]))
             path = np.vstack([sim.pos[r : r + 1], path])
             sim.assign(r, graph.positions[v], kind, path, delay=delay)
         self._bind(sim, graph, assignment, fake, coarse)
@@ -373,12 +374,13 @@ class RecurrentStrategy:
         sim.log("plan", **record)
 
     @staticmethod
-    def _distances(graph: ExplorationGraph, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _distances(graph: ExplorationGraph, points: np.ndarray) -> tuple[np.ndarray, Geodesics]:
+        """Distances from each point to every vertex ``(k, V)``, and the paths to anywhere."""
         src = graph.coarse.node_at(points)
         if (src < 0).any():
             raise RuntimeError("a robot stands outside the known traversable space")
-        d, pred = graph.coarse.distances(src, predecessors=True)
-        return d[:, graph.nodes], pred
+        geo = graph.coarse.geodesics(src)
+        return geo.dist[:, graph.nodes], geo
 
     def _deploy(
         self,

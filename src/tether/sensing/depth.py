@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tether import jit
+
 __all__ = ["DepthSensor", "cast_rays"]
 
 
@@ -91,6 +93,13 @@ def _scan(
     nx_, ny_ = occupied.shape
     ang = headings[idx, None] + rel[None, :]  # (g, R)
     dx, dy = np.cos(ang), np.sin(ang)
+    if jit.warm() and occupied.flags.c_contiguous:  # the same samples, walked compiled
+        from tether.sensing.depth_kernels import scan_kernel
+
+        cells, counts = scan_kernel(occupied, np.ascontiguousarray(origins[idx]), dx, dy, s)
+        for i, part in zip(idx, np.split(cells, np.cumsum(counts)[:-1]), strict=True):
+            result[i] = part
+        return
     px = origins[idx, 0, None, None] + dx[:, :, None] * s  # (g, R, S)
     py = origins[idx, 1, None, None] + dy[:, :, None] * s
     ix = np.floor(px).astype(np.intp)

@@ -10,6 +10,12 @@ Sensing is noise-free and the world static, so an observed cell's occupancy is
 always the true one; a map is therefore just a boolean ``known`` mask and the
 occupancy of a known cell is read from the true grid. This keeps merging a map
 to one ``|=`` per robot.
+
+A group that is the same as at its members' last exchange (and, with the BS, whose
+members hold the BS map's current version) shares one map plus what each member
+sensed since; the exchange then only writes the cells that were new to their
+observers (``incremental``), instead of merging whole maps. Both give the same
+maps (tests compare them).
 """
 
 from __future__ import annotations
@@ -28,11 +34,17 @@ class Knowledge:
         Grid shape ``(nx, ny)``.
     n_robots
         Team size.
+    incremental
+        Exchange only the newly sensed cells inside unchanged groups (the same maps
+        as merging whole maps, the reference with ``False``).
     """
 
-    def __init__(self, shape: tuple[int, int], n_robots: int) -> None:
+    def __init__(self, shape: tuple[int, int], n_robots: int, incremental: bool = True) -> None:
         self.shape = tuple(shape)
         self.n = int(n_robots)
+        self.incremental = bool(incremental)
+        # cells each robot learnt by sensing since its last exchange (new to it)
+        self._pending: list[list[np.ndarray]] = [[] for _ in range(self.n)]
         self.global_known = np.zeros(self.shape, dtype=bool)
         self.local_known = np.zeros((self.n, *self.shape), dtype=bool)
         self.dirty = np.zeros(self.n, dtype=bool)  # new cells since last exchange
@@ -44,8 +56,11 @@ class Knowledge:
         """Robot ``robot`` senses the cells ``flat_cells`` (flat indices)."""
         if len(flat_cells):
             flat = self.local_known[robot].reshape(-1)
-            if not flat[flat_cells].all():
-                flat[flat_cells] = True
+            seen = flat[flat_cells]
+            if not seen.all():
+                new = flat_cells[~seen]
+                flat[new] = True
+                self._pending[robot].append(new)
                 self.dirty[robot] = True
 
     def exchange(self, groups: list[list[int]], with_bs: list[bool]) -> None:
@@ -64,6 +79,9 @@ class Knowledge:
             behind = bs and any(self._seen[r] != self.global_version for r in members)
             if not (stale or behind or self.dirty[members].any()):
                 continue
+            if self.incremental and not (stale or behind):
+                self._exchange_new(members, bs)
+                continue
             union = np.logical_or.reduce(self.local_known[members], axis=0)
             if bs:
                 grown = union & ~self.global_known
@@ -76,4 +94,27 @@ class Knowledge:
                 self._last_group[r] = key
                 if bs:
                     self._seen[r] = self.global_version
+                self._pending[r].clear()
             self.dirty[members] = False
+
+    def _exchange_new(self, members: list[int], bs: bool) -> None:
+        """The exchange of an unchanged group: only the cells sensed since the last one.
+
+        At their last exchange (this group) the members' maps were made equal (to the
+        BS map, with the BS, which has not grown since: no member is behind); since
+        then each added only the cells in its ``_pending`` list. So the union of their
+        maps is the shared map plus those cells, and the merge writes just them.
+        """
+        new = [c for r in members for c in self._pending[r]]
+        cells = np.concatenate(new) if new else np.empty(0, dtype=np.intp)
+        if bs:
+            flat = self.global_known.reshape(-1)
+            if not flat[cells].all():
+                flat[cells] = True
+                self.global_version += 1
+        for r in members:
+            self.local_known[r].reshape(-1)[cells] = True
+            if bs:
+                self._seen[r] = self.global_version
+            self._pending[r].clear()
+        self.dirty[members] = False

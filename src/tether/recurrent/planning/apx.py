@@ -45,6 +45,7 @@ from math import comb
 
 import numpy as np
 
+from tether import jit
 from tether.recurrent.planning.problem import Problem
 from tether.recurrent.planning.steiner import _path_edges, dreyfus_wagner
 
@@ -68,7 +69,15 @@ class ApxResult:
 
 
 def _relax(g: np.ndarray, dist: np.ndarray, cap: int) -> np.ndarray:
-    """Dreyfus-Wagner relaxation ``P[s, v] = min_u g[s, u] + d(u, v)``, chunked."""
+    """Dreyfus-Wagner relaxation ``P[s, v] = min_u g[s, u] + d(u, v)``, chunked.
+
+    With the kernels on, the same integers from a compiled loop
+    (:mod:`tether.recurrent.planning.apx_kernels`).
+    """
+    if jit.enabled():
+        from tether.recurrent.planning.apx_kernels import relax_kernel
+
+        return relax_kernel(np.ascontiguousarray(g), dist, int(cap))
     out = np.empty_like(g)
     step = max(1, (1 << 21) // max(1, dist.size))
     for lo in range(0, len(g), step):

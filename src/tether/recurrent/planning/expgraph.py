@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import networkx as nx
 import numpy as np
 
+from tether import jit
 from tether.paths.geodesic import CoarseGrid
 from tether.recurrent.planning.frontiers import FrontierCluster, frontier_clusters
 from tether.sensing.links import LinkModel
@@ -34,6 +35,7 @@ __all__ = [
     "RELAY",
     "ExplorationGraph",
     "GraphBuilder",
+    "frontier_nodes",
     "snap_cluster",
     "window_counts",
 ]
@@ -95,6 +97,11 @@ class ExplorationGraph:
 
 def window_counts(mask: np.ndarray, points: np.ndarray, half_width: int) -> np.ndarray:
     """Number of true cells of ``mask`` in the square window of half width around each point."""
+    if jit.enabled():  # the same counts, compiled
+        from tether.recurrent.planning.expgraph_kernels import window_counts_kernel
+
+        pts = np.ascontiguousarray(np.atleast_2d(points), dtype=float)
+        return window_counts_kernel(np.ascontiguousarray(mask, dtype=bool), pts, int(half_width))
     c = np.floor(np.atleast_2d(points)).astype(np.intp)
     nx_, ny_ = mask.shape
     x0 = np.clip(c[:, 0] - half_width, 0, nx_)
@@ -135,6 +142,37 @@ def snap_cluster(cluster: FrontierCluster, coarse: CoarseGrid, allowed: np.ndarr
     return int(nodes[np.argmin(d)])
 
 
+def frontier_nodes(
+    known: np.ndarray,
+    occupied: np.ndarray,
+    coarse: CoarseGrid,
+    allowed: np.ndarray,
+    min_cells: int,
+    max_extent_cells: int,
+) -> list[int]:
+    """The snapped node of every frontier cluster of ``known``, in cluster order (-1: none).
+
+    :func:`~tether.recurrent.planning.frontiers.frontier_clusters`, then
+    :func:`snap_cluster` on each; with the kernels on, one compiled pass giving the
+    same nodes (:mod:`tether.recurrent.planning.expgraph_kernels`).
+    """
+    if jit.enabled():
+        from tether.recurrent.planning.expgraph_kernels import frontier_nodes_kernel
+
+        nodes, _ = frontier_nodes_kernel(
+            np.ascontiguousarray(known, dtype=bool),
+            np.ascontiguousarray(occupied, dtype=bool),
+            int(min_cells),
+            int(max_extent_cells),
+            coarse.node,
+            coarse.factor,
+            np.ascontiguousarray(allowed, dtype=bool),
+        )
+        return nodes.tolist()
+    clusters = frontier_clusters(known, occupied, min_cells, max_extent_cells)
+    return [snap_cluster(c, coarse, allowed) for c in clusters]
+
+
 class GraphBuilder:
     """Builds ``G^t`` from the BS's known map, caching communication edges across plans.
 
@@ -168,8 +206,8 @@ class GraphBuilder:
         self.gain_half_width = int(gain_half_width)
         self.min_cluster_cells = int(min_cluster_cells)
         self.max_cluster_extent = int(max_cluster_extent)
-        self._linked: set[tuple[int, int]] = set()
-        self._blocked: set[tuple[int, int]] = set()
+        self._linked = _KeySet()  # cell-key pairs known to link
+        self._blocked = _KeySet()  # ... and those no growth of the known map can link
 
     def coarse_grid(self, known: np.ndarray) -> CoarseGrid:
         return CoarseGrid(known & ~self.occupied, self.coarse_factor)
@@ -206,10 +244,9 @@ class GraphBuilder:
         nodes = [base_node, *relay_nodes]
         kind = [BASE] + [RELAY] * len(relay_nodes)
         index = {nd: i for i, nd in enumerate(nodes)}
-        for cluster in frontier_clusters(
-            known, self.occupied, self.min_cluster_cells, self.max_cluster_extent
+        for nd in frontier_nodes(
+            known, self.occupied, coarse, allowed, self.min_cluster_cells, self.max_cluster_extent
         ):
-            nd = snap_cluster(cluster, coarse, allowed)
             if nd < 0 or nd == base_node:
                 continue
             if nd in index:
@@ -237,22 +274,46 @@ class GraphBuilder:
             return np.empty((0, 2), dtype=np.intp)
         close = np.linalg.norm(positions[i] - positions[j], axis=1) <= self.link_model.range_cells
         i, j = i[close], j[close]
-        lo = np.minimum(nodes[i], nodes[j])
-        hi = np.maximum(nodes[i], nodes[j])
-        keys = list(zip(lo.tolist(), hi.tolist(), strict=True))
-        linked = np.array([k in self._linked for k in keys], dtype=bool)
-        blocked = np.array([k in self._blocked for k in keys], dtype=bool)
+        lo = np.minimum(nodes[i], nodes[j]).astype(np.int64)
+        hi = np.maximum(nodes[i], nodes[j]).astype(np.int64)
+        keys = lo * PAIR_BASE + hi
+        linked = self._linked.contains(keys)
+        blocked = self._blocked.contains(keys)
         todo = np.flatnonzero(~linked & ~blocked)
         if len(todo):
             free = known & ~self.occupied
             ok = self.link_model.linked(free, positions[i[todo]], positions[j[todo]])
             linked[todo] = ok
-            for t in todo[ok]:
-                self._linked.add(keys[t])
+            self._linked.add(keys[todo[ok]])
             never = getattr(self.link_model, "blocked_forever", None)
             rest = todo[~ok]
             if never is not None and len(rest):
                 hard = never(known & self.occupied, positions[i[rest]], positions[j[rest]])
-                for t in rest[hard]:
-                    self._blocked.add(keys[t])
+                self._blocked.add(keys[rest[hard]])
         return np.stack([i[linked], j[linked]], axis=1)
+
+
+#: a pair of coarse cell keys ``lo < hi`` is cached as ``lo * PAIR_BASE + hi``
+PAIR_BASE = 1 << 31
+
+
+class _KeySet:
+    """A growing set of ``int64`` keys, kept sorted for vectorised membership tests."""
+
+    def __init__(self) -> None:
+        self.keys = np.empty(0, dtype=np.int64)
+
+    def __len__(self) -> int:
+        return len(self.keys)
+
+    def contains(self, keys: np.ndarray) -> np.ndarray:
+        """Boolean, per key: in the set."""
+        if len(self.keys) == 0:
+            return np.zeros(len(keys), dtype=bool)
+        at = np.minimum(np.searchsorted(self.keys, keys), len(self.keys) - 1)
+        return self.keys[at] == keys
+
+    def add(self, keys: np.ndarray) -> None:
+        """Insert ``keys`` (duplicates and keys already present are fine)."""
+        if len(keys):
+            self.keys = np.union1d(self.keys, keys)

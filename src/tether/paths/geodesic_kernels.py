@@ -1,0 +1,166 @@
+"""Compiled Dijkstra on a coarse grid (numba; imported only by :mod:`tether.paths.geodesic`).
+
+:func:`grid_dijkstra_kernel` runs Dijkstra's algorithm from each source on the
+8-connected graph of :class:`~tether.paths.geodesic.CoarseGrid` read from the grid
+itself (neighbours by offsets, two edge weights), with Dial's bucket queue
+(Dial 1969) instead of a heap: buckets are a little narrower than the lightest edge,
+so relaxing an edge from bucket ``b`` always lands in a later bucket and every label
+in bucket ``b`` is final when it is reached; its nodes need no order.
+
+Distances equal ``scipy.sparse.csgraph.dijkstra``'s bit for bit, whatever order
+either queue settles equal labels in: both compute ``d(x) = min_u fl(d(u) + w(u, x))``
+with the same additions, whose solution is the smallest left-to-right floating-point
+sum over all paths (rounded addition is monotone and never lowers a label, so the
+textbook proof of Dijkstra's algorithm holds for those sums).
+
+Predecessors are scipy's where they do not depend on its heap: scipy keeps, for node
+``x``, the *first scanned* neighbour ``u`` with ``fl(d(u) + w(u, x)) == d(x)`` (a later
+one replaces it only if strictly better). Neighbours with a smaller label are scanned
+first by any queue, so that is the candidate with the smallest ``d(u)``; only when two
+candidates share it does the order of scipy's Fibonacci heap decide. Those nodes are
+flagged in ``tie`` (0.16 % of the nodes of the Cluttered map,
+``benchmarks/bench_geodesic.py``) and
+:meth:`tether.paths.geodesic.Geodesics.path` asks scipy for the row of a source whose
+path crosses one.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+NO_PRED = -9999  # scipy's predecessor of a source or an unreached node
+#: buckets are this much narrower than the lightest edge (far above rounding)
+BUCKET_SHRINK = 1.0 - 2.0**-20
+
+
+@njit(cache=True)
+def _offsets(width):  # noqa: ANN001, ANN202
+    """Neighbour offsets on the raveled padded grid: 4 orthogonal, then 4 diagonal.
+
+    For a diagonal step ``(sx, sy)``, ``via_x`` and ``via_y`` are the offsets of the
+    two orthogonal cells ``(sx, 0)`` and ``(0, sy)`` that must be traversable too.
+    """
+    step = np.array([-width, width, -1, 1, -width - 1, -width + 1, width - 1, width + 1])
+    via_x = np.array([0, 0, 0, 0, -width, -width, width, width])
+    via_y = np.array([0, 0, 0, 0, -1, 1, -1, 1])
+    return step, via_x, via_y
+
+
+@njit(cache=True)
+def grid_dijkstra_kernel(free, nodes, w_orth, w_diag, sources, with_pred):  # noqa: ANN001, ANN201
+    """Distances, predecessors and ties ``(k, n)`` from each source node.
+
+    ``free``: the traversable mask with a border of blocked cells (``(cx + 2, cy + 2)``);
+    ``nodes``: the raveled (C-order) index in it of each node's cell; ``sources``: node
+    ids. Orthogonal neighbours cost ``w_orth``, diagonal ones ``w_diag`` when both
+    orthogonal cells between are traversable (no corner cut). Unreached nodes get
+    ``inf`` and :data:`NO_PRED`, as the source. Without ``with_pred`` the last two
+    arrays are empty.
+    """
+    width = free.shape[1]
+    size = free.size
+    flat = free.ravel()
+    n = len(nodes)
+    k = len(sources)
+    dist = np.empty((k, n))
+    rows = k if with_pred else 0
+    pred = np.full((rows, n), NO_PRED, np.int32)
+    tie = np.zeros((rows, n), np.bool_)
+    node_of = np.full(size, NO_PRED, np.int32)
+    for i in range(n):
+        node_of[nodes[i]] = i
+    step, via_x, via_y = _offsets(width)
+    cost = np.empty(8)
+    cost[:4] = w_orth
+    cost[4:] = w_diag
+    bucket = min(w_orth, w_diag) * BUCKET_SHRINK
+    ring = int(math.ceil(max(w_orth, w_diag) / bucket)) + 3
+    head = np.empty(ring, np.int64)
+    cap = 8 * n + 1  # each entry: the source, or a strict decrease along an edge
+    nxt = np.empty(cap, np.int64)
+    item = np.empty(cap, np.int64)
+    done = np.zeros(size, np.bool_)
+    d = np.empty(size)
+    for row in range(k):
+        d[:] = np.inf
+        head[:] = -1
+        done[:] = False
+        s = nodes[sources[row]]
+        d[s] = 0.0
+        item[0] = s
+        nxt[0] = -1
+        head[0] = 0
+        used = 1
+        pending = 1
+        b = 0
+        while pending > 0:
+            slot = b % ring
+            while head[slot] >= 0:
+                entry = head[slot]
+                head[slot] = nxt[entry]
+                pending -= 1
+                u = item[entry]
+                if done[u] or int(d[u] / bucket) != b:
+                    continue  # settled already, or its label fell to a lower bucket since
+                done[u] = True
+                du = d[u]
+                for j in range(8):
+                    v = u + step[j]
+                    if not flat[v]:
+                        continue
+                    if j >= 4 and not (flat[u + via_x[j]] and flat[u + via_y[j]]):
+                        continue
+                    nd = du + cost[j]
+                    if nd < d[v]:  # never for a settled v: its label is <= du
+                        d[v] = nd
+                        t = int(nd / bucket) % ring
+                        item[used] = v
+                        nxt[used] = head[t]
+                        head[t] = used
+                        used += 1
+                        pending += 1
+            b += 1
+        for i in range(n):
+            dist[row, i] = d[nodes[i]]
+        if with_pred:
+            _predecessors(flat, d, nodes, node_of, step, via_x, via_y, cost, pred[row], tie[row])
+    return dist, pred, tie
+
+
+@njit(cache=True)
+def _predecessors(flat, d, nodes, node_of, step, via_x, via_y, cost, p, t):  # noqa: ANN001, ANN202
+    """scipy's predecessor of every reached node but the source, and its ``tie`` flag."""
+    for i in range(len(nodes)):
+        x = nodes[i]
+        dx = d[x]
+        if dx == 0.0 or dx == np.inf:  # the source (edges are positive) or unreached
+            continue
+        best = -1
+        best_d = np.inf
+        for j in range(8):
+            u = x + step[j]
+            if not flat[u]:
+                continue
+            if j >= 4 and not (flat[x + via_x[j]] and flat[x + via_y[j]]):
+                continue
+            du = d[u]
+            if du < dx and du + cost[j] == dx:
+                if du < best_d:
+                    best = u
+                    best_d = du
+                    t[i] = False
+                elif du == best_d:
+                    t[i] = True
+        p[i] = node_of[best]
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the kernel on a 3 x 3 grid."""
+    free = np.zeros((5, 5), dtype=bool)
+    free[1:4, 1:4] = True
+    nodes = np.flatnonzero(free.ravel())
+    for with_pred in (False, True):
+        grid_dijkstra_kernel(free, nodes, 3.0, 3.0 * np.sqrt(2.0), np.array([4]), with_pred)

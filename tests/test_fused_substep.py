@@ -1,0 +1,50 @@
+"""The fused sub-step paths give the chain's bits: weights + eigenpair in one kernel call
+(``compute_weights(..., guess=nu)``) and the exact force in one call (``exact_force``),
+compiled and not, in free space and in the town."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tether import jit
+from tether.continuous.gradient import connectivity_force, exact_force, messages
+from tether.continuous.placement import safe_team
+from tether.continuous.strategy import ConnectivityStrategyParams
+from tether.continuous.weights import compute_weights
+from tether.world.clearance import ObstacleIndex
+from tether.world.scenes import make_scene
+from tether.world.world import World
+
+pytestmark = pytest.mark.skipif(not jit.available(), reason="needs numba")
+
+PARAMS = ConnectivityStrategyParams().connectivity()
+
+
+@pytest.mark.parametrize("scene", ["free", "town"])
+def test_fused_weights_eigenpair_and_force_equal_the_chain(scene: str) -> None:
+    if scene == "free":
+        world = World(dim=3, bounds_m=np.array([[0.0, 0, 0], [200.0, 200.0, 10.0]]))
+    else:
+        world = make_scene("town", 0, size_m=(50.0, 70.0), resolution_m=0.25)
+    obs = ObstacleIndex.from_world(world)
+    rng = np.random.default_rng(2)
+    q = safe_team(world, 30, PARAMS, rng, margin_m=5.0, height_m=(1.0, 8.0))
+    nu = compute_weights(q, PARAMS, obs).fiedler()[1]
+    for _ in range(8):
+        q2 = q + rng.normal(0.0, 0.05, q.shape)
+        with jit.using(True):
+            fused = compute_weights(q2, PARAMS, obs, guess=nu)
+            assert fused._small is not None  # the eigenpair came with the weights
+            lam, vec = fused.fiedler(guess=nu)
+            chain = compute_weights(q2, PARAMS, obs).fiedler(guess=nu)
+            force = exact_force(fused, lam, vec, PARAMS)
+            force_chain = connectivity_force(fused, lam, messages(fused, vec), PARAMS)
+        with jit.using(False):
+            ref = compute_weights(q2, PARAMS, obs)
+            ref_lam, ref_vec = ref.fiedler(guess=nu)
+            ref_force = exact_force(ref, ref_lam, ref_vec, PARAMS)
+        assert lam == chain[0] == ref_lam
+        assert np.array_equal(vec, chain[1]) and np.array_equal(vec, ref_vec)
+        assert np.array_equal(force, force_chain) and np.array_equal(force, ref_force)
+        nu = vec
