@@ -46,7 +46,6 @@ KERNEL_MODULES = (
     "paths/astar_kernels.py",
     "graph/kernels.py",
     "graph/grid_kernels.py",
-    "graph/spectrum_kernels.py",
     "graph/metrics_kernels.py",
     "graph/link_kernels.py",
     "paths/geodesic_kernels.py",

@@ -7,8 +7,12 @@ calls whose overhead exceeds the arithmetic; :func:`team_metrics_kernel` compute
 four at once:
 
 * components by union-find (:func:`~tether.graph.kernels.component_count_kernel`);
-* lambda2 by :func:`~tether.graph.spectrum_kernels.lambda2_kernel` (Householder and
-  bisection: the reference's ``eigh`` value to rounding), exactly 0 when disconnected;
+* lambda2 as :func:`tether.graph.fiedler.fiedler` gets it for up to 400 nodes: the second
+  eigenvalue of ``numpy.linalg.eigh`` of the same dense Laplacian
+  (:func:`~tether.graph.kernels.laplacian_dense_kernel`), here numba's ``eigh`` in the
+  kernel (LAPACK ``dsyevd``, as numpy's: the same bits, tests compare them exactly;
+  numpy's call overhead and argument checks are what it saves), clipped at 0, and
+  exactly 0 when the graph is disconnected;
 * the shortest link: ``sqrt`` of the smallest squared length of ``true_relative``'s
   rows summed in coordinate order, as ``numpy.linalg.norm(axis=1)`` sums them (so the
   same bits: ``sqrt`` is monotone and correctly rounded);
@@ -23,8 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from tether.graph.kernels import component_count_kernel
-from tether.graph.spectrum_kernels import lambda2_kernel
+from tether.graph.kernels import component_count_kernel, laplacian_dense_kernel
 
 
 @njit(cache=True)
@@ -40,7 +43,10 @@ def team_metrics_kernel(n, pairs, positions, true_relative, collision_m, graph):
     n_comp, lam = -1, np.nan
     if graph:
         n_comp = component_count_kernel(n, pairs) if n > 0 else 0
-        lam = 0.0 if n_comp > 1 else lambda2_kernel(n, pairs)
+        lam = 0.0
+        if n_comp == 1 and n >= 2:
+            lap = laplacian_dense_kernel(n, pairs, np.ones(len(pairs)))
+            lam = max(np.linalg.eigh(lap)[0][1], 0.0)
     shortest = np.inf
     if n > 1 and len(pairs) > 0:
         dim = true_relative.shape[1]
