@@ -11,6 +11,7 @@ machine and wall times) and ``docs/figures/multi_target_fig9.png``.
     python benchmarks/fig9.py --seeds 100                  # the paper's 1,800 trials
     python benchmarks/fig9.py --seeds 5 --sizes 10 20 35   # a quick version
     python benchmarks/fig9.py --no-run                     # figure from every finished trial
+    python benchmarks/fig9.py --first-seed 12 --seeds 6    # configurations 12-17 only
 
 Trends (in the JSON): the ratio of the median completion time at the largest team to
 the smallest, Spearman's rank correlation of each metric with N over all trials (with
@@ -49,7 +50,9 @@ def sweep_file(scene: str) -> Path:
     return ROOT / "src" / "tether" / "scenarios" / "paper" / f"continuous_fig9_{scene}.yaml"
 
 
-def run_column(scene: str, out: Path, seeds: int, sizes: list[int], workers: int) -> float:
+def run_column(
+    scene: str, out: Path, seeds: int | list[int], sizes: list[int], workers: int
+) -> float:
     sc = load_scenario(sweep_file(scene))
     sc.sweep = {"team.n_robots": sizes}
     tic = time.perf_counter()
@@ -178,6 +181,8 @@ def figure(result: dict, sizes: list[int], path: Path) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=100, help="target configurations per N")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="run configurations FIRST .. FIRST+SEEDS-1 (to time a slice)")  # fmt: skip
     ap.add_argument("--sizes", type=int, nargs="+", default=[10, 15, 20, 25, 30, 35])
     ap.add_argument("--scenes", nargs="+", default=list(SCENES))
     ap.add_argument("--runs", type=Path, default=ROOT / "runs" / "fig9")
@@ -194,8 +199,9 @@ def main() -> None:
     for scene in a.scenes:
         out = a.runs / scene
         if not a.no_run:
-            result["wall_time_s"][scene] = run_column(scene, out, a.seeds, a.sizes, a.workers)
-        seeds = None if a.no_run else a.seeds  # a summary takes every finished seed
+            chosen = list(range(a.first_seed, a.first_seed + a.seeds))
+            result["wall_time_s"][scene] = run_column(scene, out, chosen, a.sizes, a.workers)
+        seeds = None if a.no_run else a.first_seed + a.seeds  # a summary: every finished seed
         result["scenes"][scene] = summarise(load_rows(out, a.sizes, seeds), a.sizes)
         s = result["scenes"][scene]
         print(f"{scene}: {s['trials']} trials, complete {s['complete_share']}, completion "
