@@ -4,7 +4,11 @@ Rows come from ``results/issue14.json`` (old 4cef8e4, main, new in one run); row
 lacks from ``results/issue14_first_run.json`` (old against main, whose code for those
 rows perf2 did not change, so main's number stands for new too).
 
-    python benchmarks/issue14_table.py [--final PATH] [--first PATH]
+    python benchmarks/issue14_table.py [--final PATH] [--first PATH] [--update PATH ...]
+
+``--update`` takes later runs of some rows (``bench_issue14.py --old-root <main then>``,
+e.g. ``results/issue14_eig.json``): their old tree (main at that time) fills the main
+column, their new tree the new column; the 4cef8e4 column stays the first file's.
 """
 
 from __future__ import annotations
@@ -45,10 +49,19 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--final", type=Path, default=HERE / "results" / "issue14.json")
     ap.add_argument("--first", type=Path, default=HERE / "results" / "issue14_first_run.json")
+    ap.add_argument("--update", type=Path, nargs="*", default=[])
     a = ap.parse_args()
     final = json.loads(a.final.read_text())["rows"] if a.final.exists() else {}
+    for path in a.update:  # later runs: their "old" is main at the time, "new" the branch
+        later = json.loads(path.read_text())
+        for key, row in later["rows"].items():
+            merged = dict(final.get(key, {}))
+            merged.update({k: v for k, v in row.items() if not k.startswith("old")})
+            merged["main"], merged["main_extra"] = row["old"], row.get("old_extra")
+            merged["trees"] = later.get("trees", {})
+            final[key] = merged
     first = json.loads(a.first.read_text())["rows"] if a.first.exists() else {}
-    print("| work | goal | old (4cef8e4) | main (1a3426c) | new (perf2) | met? |")
+    print("| work | goal | old (4cef8e4) | main (per row, below) | new | met? |")
     print("| --- | --- | --- | --- | --- | --- |")
     own: dict[str, dict] = {}
     for key, (label, unit, scale) in LABELS.items():
