@@ -27,7 +27,11 @@ import math
 import numpy as np
 from numba import njit
 
-from tether.graph.kernels import component_count_kernel, laplacian_dense_kernel
+from tether.graph.kernels import (
+    component_count_kernel,
+    laplacian_dense_kernel,
+    pairs_within_kernel,
+)
 
 
 @njit(cache=True)
@@ -59,16 +63,7 @@ def team_metrics_kernel(n, pairs, positions, true_relative, collision_m, graph):
         shortest = math.sqrt(low)
     close = 0
     if collision_m > 0:
-        r2 = collision_m * collision_m
-        n_robots, dim = positions.shape
-        for i in range(n_robots):
-            for j in range(i + 1, n_robots):
-                sq = 0.0
-                for c in range(dim):
-                    x = positions[i, c] - positions[j, c]
-                    sq += x * x
-                if sq <= r2:
-                    close += 1
+        close = len(pairs_within_kernel(positions, collision_m))
     return n_comp, lam, shortest, close
 
 

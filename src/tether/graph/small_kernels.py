@@ -14,6 +14,7 @@ import math
 import numpy as np
 from numba import njit, uint64
 
+from tether.graph.kernels import block_sum
 from tether.graph.small import (
     BAD_GUESS,
     BREAKDOWN,
@@ -32,34 +33,6 @@ from tether.graph.small import (
 )
 
 
-@njit(cache=True, inline="always")
-def _block(a, lo, n):  # noqa: ANN001, ANN202
-    """numpy's pairwise sum of ``a[lo:lo + n]`` for ``n <= 128``: eight running sums."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += a[lo + i]
-        return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    while i < n - (n % 8):
-        r0 += a[lo + i]
-        r1 += a[lo + i + 1]
-        r2 += a[lo + i + 2]
-        r3 += a[lo + i + 3]
-        r4 += a[lo + i + 4]
-        r5 += a[lo + i + 5]
-        r6 += a[lo + i + 6]
-        r7 += a[lo + i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
-    return res
-
-
 @njit(cache=True)
 def pairwise_sum(a, lo, n):  # noqa: ANN001, ANN201
     """``numpy.add.reduce(a[lo:lo + n])`` (contiguous) in numpy's order, without recursion.
@@ -71,14 +44,14 @@ def pairwise_sum(a, lo, n):  # noqa: ANN001, ANN201
     load a recursive function compiled into another module from its cache).
     """
     if n <= 128:
-        return _block(a, lo, n)
+        return block_sum(a, lo, n)
     h = n // 2
     h -= h % 8
     halves = 0.0
     for side in range(2):
         lo1, n1 = (lo, h) if side == 0 else (lo + h, n - h)
         if n1 <= 128:
-            part = _block(a, lo1, n1)
+            part = block_sum(a, lo1, n1)
         else:
             h1 = n1 // 2
             h1 -= h1 % 8
@@ -86,11 +59,11 @@ def pairwise_sum(a, lo, n):  # noqa: ANN001, ANN201
             for side1 in range(2):
                 lo2, n2 = (lo1, h1) if side1 == 0 else (lo1 + h1, n1 - h1)
                 if n2 <= 128:
-                    q = _block(a, lo2, n2)
+                    q = block_sum(a, lo2, n2)
                 else:
                     h2 = n2 // 2
                     h2 -= h2 % 8
-                    q = _block(a, lo2, h2) + _block(a, lo2 + h2, n2 - h2)
+                    q = block_sum(a, lo2, h2) + block_sum(a, lo2 + h2, n2 - h2)
                 part = q if side1 == 0 else part + q
         halves = part if side == 0 else halves + part
     return halves
