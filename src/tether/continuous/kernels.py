@@ -139,11 +139,7 @@ def pairs_in_range(q, r):  # noqa: ANN001, ANN201
                     partners[cnt] = j
                     cnt += 1
         partners[:cnt].sort()
-        while m + cnt > len(out):
-            out = _grow(out)
-        for k in range(cnt):
-            out[m, 0], out[m, 1] = i, partners[k]
-            m += 1
+        out, m = _append(out, m, i, partners, cnt)
     return out[:m].copy()
 
 
@@ -201,11 +197,7 @@ def _pairs_dense_cells(q, r, code, size, n_cells, out):  # noqa: ANN001, ANN202,
                     f -= 1
                 partners[f] = j
                 cnt += 1
-        while m + cnt > len(out):
-            out = _grow(out)
-        for k in range(cnt):
-            out[m, 0], out[m, 1] = i, partners[k]
-            m += 1
+        out, m = _append(out, m, i, partners, cnt)
     return out[:m].copy()
 
 
@@ -214,6 +206,17 @@ def _grow(out):  # noqa: ANN001, ANN202
     bigger = np.empty((2 * len(out), 2), np.int64)
     bigger[: len(out)] = out
     return bigger
+
+
+@njit(cache=True)
+def _append(out, m, i, partners, cnt):  # noqa: ANN001, ANN202
+    """Rows ``(i, partners[k])`` for ``k < cnt`` after row ``m`` of ``out`` (grown as needed)."""
+    while m + cnt > len(out):
+        out = _grow(out)
+    for k in range(cnt):
+        out[m, 0], out[m, 1] = i, partners[k]
+        m += 1
+    return out, m
 
 
 @njit(cache=True)
