@@ -24,7 +24,6 @@ import tether.sensing.draws_kernels as draws_kernels
 import tether.sensing.robots as robots
 import tether.sensing.robots_kernels as robots_kernels
 import tether.silent.steering_kernels as steering_kernels
-import tether.silent.step_kernels as step_kernels
 import tether.silent.strategy as strategy_mod
 import tether.sim as sim
 from tether.paths.trajectory import Polyline
@@ -39,7 +38,7 @@ PARTS = [
     (strategy_mod.SilentStrategy, "step"),
     (strategy_mod.SilentStrategy, "leader_target"),
     (steering_kernels, "team_steps_kernel"),
-    (step_kernels, "silent_step_kernel"),
+    (steering_kernels, "silent_step_kernel"),
     (sim, "team_metrics"),
     (metrics_kernels, "team_metrics_kernel"),
 ]

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import importlib
 import math
-from functools import cache
-from types import ModuleType
 from typing import Any, Literal
 
 import numpy as np
@@ -81,14 +79,6 @@ def _norm(v: np.ndarray) -> float:
     """``float(np.linalg.norm(v))`` of one vector, which numpy computes as
     ``sqrt(v.dot(v))``: the same value without its call overhead (once per step)."""
     return math.sqrt(v.dot(v))
-
-
-@cache
-def _step_kernels() -> ModuleType:
-    """:mod:`tether.silent.step_kernels`, imported on first use (it loads numba)."""
-    from tether.silent import step_kernels
-
-    return step_kernels
 
 
 def _load_function(spec: str) -> TimeFunction:
@@ -261,8 +251,8 @@ class SilentStrategy(Strategy):
         self._leader_travel_m = 0.0
         self._blocked_steps = 0
         self._stuck = 0
-        # the whole step in one compiled call (step_kernels): a waypoint path, cost (13),
-        # free space; the path's per-segment values as the kernel reads them
+        # the whole step in one compiled call (steering_kernels.silent_step_kernel): a
+        # waypoint path, cost (13), free space; the path's per-segment values for it
         traj = self.trajectory
         self._path = None
         if (
@@ -271,8 +261,13 @@ class SilentStrategy(Strategy):
             and not world.has_obstacles
             and world.bounds_m is None
         ):
-            self._path = (traj.waypoints, traj._seg, np.array(traj._denom, dtype=float),
-                          traj._cum, traj._seg_len, traj.length_m, traj.end)  # fmt: skip
+            self._path = (
+                traj.waypoints, traj._seg, np.array(traj._denom, dtype=float), traj._cum,
+                traj._seg_len, traj.length_m, traj.end, float(2 * self.d_max_m),
+                float(self.gamma), float(self.d0_m), float(self.d_max_m),
+                float(self.radial_error_m), float(self.angular_error_rad),
+                float(self.min_separation_m), bool(self.search_directions),
+            )  # fmt: skip
 
     def leader_target(self, position: np.ndarray, t_next_s: float, dt_s: float) -> np.ndarray:
         """Where the leader wants to be at ``t + dt`` (a carrot ahead on the path)."""
@@ -323,20 +318,17 @@ class SilentStrategy(Strategy):
         return TeamState(new_positions, velocities)
 
     def _step_compiled(self, ctx: StepContext) -> TeamState:
-        """:meth:`step` in one call of :func:`tether.silent.step_kernels.silent_step_kernel`
+        """:meth:`step` in one call of :func:`tether.silent.steering_kernels.silent_step_kernel`
         (the same arithmetic: the same positions, progress and leader statistics)."""
         obs, state = ctx.obs, ctx.state
         max_step = np.inf if self.max_speed_mps is None else self.max_speed_mps * ctx.dt_s
         positions, velocities, (progress, wanted, moved, gap) = (
-            _step_kernels().silent_step_kernel(
+            steering._kernels().silent_step_kernel(
                 np.ascontiguousarray(state.positions, dtype=float),
                 np.ascontiguousarray(obs.measured, dtype=float),
                 obs.indptr.astype(np.int64, copy=False), self.leader, *self._path,
-                float(self.progress_m), float(self.speed_mps * ctx.dt_s),
-                float(2 * self.d_max_m), float(ctx.dt_s), float(self.gamma), float(self.d0_m),
-                float(self.d_max_m), float(self.radial_error_m),
-                float(self.angular_error_rad), float(self.min_separation_m), float(max_step),
-                bool(self.search_directions),
+                float(self.progress_m), float(self.speed_mps * ctx.dt_s), float(ctx.dt_s),
+                float(max_step),
             )
         )  # fmt: skip
         self.progress_m = progress
