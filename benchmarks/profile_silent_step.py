@@ -35,6 +35,7 @@ PARTS = [
     (robots_kernels, "sense_pairs_kernel"),
     (draws_kernels, "sensor_errors_kernel"),
     (robots_kernels, "noise_kernel"),
+    (robots_kernels, "sense_noisy_kernel"),
     (strategy_mod.SilentStrategy, "step"),
     (strategy_mod.SilentStrategy, "leader_target"),
     (steering_kernels, "team_steps_kernel"),

@@ -84,8 +84,10 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
     """Per pair: a third robot's body hides the pair (``_occluded``'s test exactly).
 
     Each robot's neighbours are sorted by their squared distance (the value the test
-    computes), so the scan of pair ``(i, k)`` stops at the first neighbour no closer
-    to ``i`` than ``k``: the test ``|ij|^2 < |ik|^2`` fails for every later one.
+    computes), with their relative positions, so the scan of pair ``(i, k)`` stops at the
+    first neighbour no closer to ``i`` than ``k``: the test ``|ij|^2 < |ik|^2`` fails for
+    every later one. The test's two other conditions are checked one after the other
+    (the division of ``perp2`` only where ``|kj|^2 < |ik|^2`` holds): the same booleans.
     """
     n, dim = positions.shape
     m = len(pairs)
@@ -94,41 +96,43 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
         return out
     indptr, nbr = _neighbours(n, pairs)
     d2 = np.empty(len(nbr))
-    w = np.empty((2, dim))  # rows: i -> j, i -> k
+    rel = np.empty((len(nbr), dim))  # i -> j, in the sorted order
+    w = np.empty((1, dim))
     for i in range(n):
         lo, hi = indptr[i], indptr[i + 1]
-        for e in range(lo, hi):
+        for e in range(lo, hi):  # insertion sort by squared distance (stable)
+            j = nbr[e]
             for c in range(dim):
-                w[0, c] = positions[nbr[e], c] - positions[i, c]
-            d2[e] = _dot_rows(w, 0, w, 0)
-        for e in range(lo + 1, hi):  # insertion sort by squared distance
-            j, dj = nbr[e], d2[e]
+                w[0, c] = positions[j, c] - positions[i, c]
+            dj = _dot_rows(w, 0, w, 0)
             f = e
             while f > lo and d2[f - 1] > dj:
                 nbr[f], d2[f] = nbr[f - 1], d2[f - 1]
+                for c in range(dim):
+                    rel[f, c] = rel[f - 1, c]
                 f -= 1
             nbr[f], d2[f] = j, dj
+            for c in range(dim):
+                rel[f, c] = w[0, c]
     r2 = body_radius_m**2
     for p in range(m):
         i, k = pairs[p, 0], pairs[p, 1]
         for c in range(dim):
-            w[1, c] = positions[k, c] - positions[i, c]
-        d2_ik = _dot_rows(w, 1, w, 1)
+            w[0, c] = positions[k, c] - positions[i, c]
+        d2_ik = _dot_rows(w, 0, w, 0)
         for e in range(indptr[i], indptr[i + 1]):
             d2_ij = d2[e]
             if not d2_ij < d2_ik:
                 break
-            j = nbr[e]
-            if j == k:
+            if nbr[e] == k:
                 continue
-            for c in range(dim):
-                w[0, c] = positions[j, c] - positions[i, c]
-            proj = _dot_rows(w, 0, w, 1)
+            proj = _dot_rows(rel, e, w, 0)
             d2_kj = d2_ik - 2.0 * proj + d2_ij
-            perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
-            if d2_kj < d2_ik and perp2 < r2:
-                out[p] = True
-                break
+            if d2_kj < d2_ik:
+                perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
+                if perp2 < r2:
+                    out[p] = True
+                    break
     return out
 
 
