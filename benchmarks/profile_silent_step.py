@@ -35,9 +35,11 @@ PARTS = [
     (robots_kernels, "sense_pairs_kernel"),
     (draws_kernels, "sensor_errors_kernel"),
     (robots_kernels, "noise_kernel"),
+    (robots_kernels, "sense_noisy_kernel"),
     (strategy_mod.SilentStrategy, "step"),
     (strategy_mod.SilentStrategy, "leader_target"),
     (steering_kernels, "team_steps_kernel"),
+    (steering_kernels, "silent_step_kernel"),
     (sim, "team_metrics"),
     (metrics_kernels, "team_metrics_kernel"),
 ]

@@ -271,6 +271,14 @@ def sense(
         kernels = _kernels()
         if n <= KERNEL_PAIRS_MAX_N and (world is None or not world.has_obstacles):
             radius = float(sensor.body_radius_m) if sensor.occlusion else 0.0
+            if positions.shape[1] == 2 and kernels.numpy_trig_is_libm():  # one call
+                draws = _draws_kernels()
+                pairs, indptr, target, rel, measured = kernels.sense_noisy_kernel(
+                    positions, float(sensor.range_m), radius, draws.NOISE_CODES[sensor.noise],
+                    float(sensor.radial_error_m), float(sensor.angular_error_rad),
+                    draws.bitgen_addresses(rng),
+                )  # fmt: skip
+                return Observation(pairs, indptr, target, measured, rel)
             pairs, indptr, target, rel = kernels.sense_pairs_kernel(
                 positions, float(sensor.range_m), radius
             )

@@ -14,6 +14,11 @@ Three kernels, each the arithmetic of its reference, term for term:
 * :func:`sense_pairs_kernel` -- for small teams in free space, the three steps before
   the noise in one call (range by :func:`~tether.graph.kernels.pairs_within_kernel`,
   occlusion, CSR): numba's dispatch costs microseconds per call and argument;
+* :func:`sense_noisy_kernel` -- for small teams in free space in 2-D, all of
+  :func:`~tether.sensing.robots.sense` in one call: :func:`sense_pairs_kernel`, the draws
+  of :func:`~tether.sensing.draws_kernels.sensor_errors_kernel`, ``cos``/``sin`` of the
+  angular errors and :func:`noise_kernel`; used only where numpy's ``cos``/``sin`` are
+  the C library's, which the kernel calls (:func:`numpy_trig_is_libm`);
 * :func:`noise_kernel` -- the arithmetic of :func:`~tether.sensing.robots._noisy`
   (bounded radial and angular errors, the paper's Fig. 1) once its random numbers are
   drawn: the caller draws them with numpy's ``Generator`` in the reference's order and
@@ -27,11 +32,13 @@ each kernel with its reference bit for bit).
 from __future__ import annotations
 
 import math
+from functools import cache
 
 import numpy as np
 from numba import njit
 
 from tether.graph.kernels import pairs_within_kernel
+from tether.sensing.draws_kernels import bitgen_addresses, sensor_errors_kernel
 
 EPS = 1e-12  # tether.geometry.unit's default
 
@@ -77,8 +84,10 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
     """Per pair: a third robot's body hides the pair (``_occluded``'s test exactly).
 
     Each robot's neighbours are sorted by their squared distance (the value the test
-    computes), so the scan of pair ``(i, k)`` stops at the first neighbour no closer
-    to ``i`` than ``k``: the test ``|ij|^2 < |ik|^2`` fails for every later one.
+    computes), with their relative positions, so the scan of pair ``(i, k)`` stops at the
+    first neighbour no closer to ``i`` than ``k``: the test ``|ij|^2 < |ik|^2`` fails for
+    every later one. The test's two other conditions are checked one after the other
+    (the division of ``perp2`` only where ``|kj|^2 < |ik|^2`` holds): the same booleans.
     """
     n, dim = positions.shape
     m = len(pairs)
@@ -87,41 +96,43 @@ def occluded_kernel(positions, pairs, body_radius_m):  # noqa: ANN001, ANN201
         return out
     indptr, nbr = _neighbours(n, pairs)
     d2 = np.empty(len(nbr))
-    w = np.empty((2, dim))  # rows: i -> j, i -> k
+    rel = np.empty((len(nbr), dim))  # i -> j, in the sorted order
+    w = np.empty((1, dim))
     for i in range(n):
         lo, hi = indptr[i], indptr[i + 1]
-        for e in range(lo, hi):
+        for e in range(lo, hi):  # insertion sort by squared distance (stable)
+            j = nbr[e]
             for c in range(dim):
-                w[0, c] = positions[nbr[e], c] - positions[i, c]
-            d2[e] = _dot_rows(w, 0, w, 0)
-        for e in range(lo + 1, hi):  # insertion sort by squared distance
-            j, dj = nbr[e], d2[e]
+                w[0, c] = positions[j, c] - positions[i, c]
+            dj = _dot_rows(w, 0, w, 0)
             f = e
             while f > lo and d2[f - 1] > dj:
                 nbr[f], d2[f] = nbr[f - 1], d2[f - 1]
+                for c in range(dim):
+                    rel[f, c] = rel[f - 1, c]
                 f -= 1
             nbr[f], d2[f] = j, dj
+            for c in range(dim):
+                rel[f, c] = w[0, c]
     r2 = body_radius_m**2
     for p in range(m):
         i, k = pairs[p, 0], pairs[p, 1]
         for c in range(dim):
-            w[1, c] = positions[k, c] - positions[i, c]
-        d2_ik = _dot_rows(w, 1, w, 1)
+            w[0, c] = positions[k, c] - positions[i, c]
+        d2_ik = _dot_rows(w, 0, w, 0)
         for e in range(indptr[i], indptr[i + 1]):
             d2_ij = d2[e]
             if not d2_ij < d2_ik:
                 break
-            j = nbr[e]
-            if j == k:
+            if nbr[e] == k:
                 continue
-            for c in range(dim):
-                w[0, c] = positions[j, c] - positions[i, c]
-            proj = _dot_rows(w, 0, w, 1)
+            proj = _dot_rows(rel, e, w, 0)
             d2_kj = d2_ik - 2.0 * proj + d2_ij
-            perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
-            if d2_kj < d2_ik and perp2 < r2:
-                out[p] = True
-                break
+            if d2_kj < d2_ik:
+                perp2 = d2_ij - proj * proj / max(d2_ik, 1e-300)
+                if perp2 < r2:
+                    out[p] = True
+                    break
     return out
 
 
@@ -234,6 +245,57 @@ def noise_kernel(rel, e_r, cos_a, sin_a, flip, normal):  # noqa: ANN001, ANN201,
     return out
 
 
+@njit(cache=True)
+def sense_noisy_kernel(positions, range_m, body_radius_m, noise, radial_m, angular_rad, bitgen):  # noqa: ANN001, ANN201, PLR0913
+    """``(pairs, indptr, target, rel, measured)`` of a 2-D team in free space, one call.
+
+    :func:`sense_pairs_kernel`, then the errors drawn as
+    :func:`~tether.sensing.draws_kernels.sensor_errors_kernel` draws them (``noise``:
+    its codes; ``bitgen``: the bit generator's addresses), ``cos``/``sin`` of the angular
+    errors (the C library's: equal to numpy's only where :func:`numpy_trig_is_libm`) and
+    :func:`noise_kernel`: the measurements of :func:`~tether.sensing.robots._noisy`.
+    """
+    pairs, indptr, target, rel = sense_pairs_kernel(positions, range_m, body_radius_m)
+    k = len(rel)
+    if noise == 0 or k == 0:
+        return pairs, indptr, target, rel, rel.copy()
+    e_r, e_a, flip = sensor_errors_kernel(k, noise, radial_m, angular_rad, True, bitgen)
+    cos_a = np.empty(k)
+    sin_a = np.empty(k)
+    for q in range(k):
+        cos_a[q] = math.cos(e_a[q])
+        sin_a[q] = math.sin(e_a[q])
+    measured = noise_kernel(rel, e_r, cos_a, sin_a, flip, np.empty((0, 2)))
+    return pairs, indptr, target, rel, measured
+
+
+@njit(cache=True)
+def _cos_sin_kernel(x):  # noqa: ANN001, ANN202
+    """``cos`` and ``sin`` of ``x`` as the kernels compute them (the C library's)."""
+    c = np.empty(len(x))
+    s = np.empty(len(x))
+    for q in range(len(x)):
+        c[q] = math.cos(x[q])
+        s[q] = math.sin(x[q])
+    return c, s
+
+
+@cache
+def numpy_trig_is_libm() -> bool:
+    """numpy's float64 ``cos``/``sin`` give the kernels' (the C library's) values here.
+
+    numpy dispatches them to its own SIMD code on some CPUs (SVML on AVX-512 machines),
+    whose last bits differ from the C library's on a good share of arguments; checked
+    once per process on 4,096 arguments across ``[-pi, pi]`` (angular errors are below
+    ``pi / 2``) and on the sensor's own errors' range.
+    """
+    x = np.concatenate(
+        [np.linspace(-np.pi, np.pi, 2048), np.random.default_rng(0).uniform(-0.5, 0.5, 2048)]
+    )
+    c, s = _cos_sin_kernel(x)
+    return bool(np.array_equal(c, np.cos(x)) and np.array_equal(s, np.sin(x)))
+
+
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernels for 2-D and 3-D teams."""
     for dim in (2, 3):
@@ -245,3 +307,7 @@ def warm_up() -> None:
         k = len(rel)
         flips = np.ones(k, np.uint8)
         noise_kernel(rel, np.zeros(k), np.ones(k), np.zeros(k), flips, np.ones((k, dim)))
+    bitgen = bitgen_addresses(np.random.default_rng(0))
+    for noise in (0, 1, 2):
+        sense_noisy_kernel(np.eye(3, 2) * 2.0, 3.0, 0.5, noise, 0.5, 0.1, bitgen)
+    numpy_trig_is_libm()

@@ -19,6 +19,7 @@ from tether.config import MAX_LENGTH_M, Coordinate, Scenario, finite_strict
 from tether.errors import ScenarioError
 from tether.paths.trajectory import Polyline, TimeFunction
 from tether.registry import STRATEGIES
+from tether.silent import steering
 from tether.silent.steering import team_steps
 from tether.sim import StepContext, Strategy, TeamState
 from tether.viz.plots import team_snapshot
@@ -250,6 +251,23 @@ class SilentStrategy(Strategy):
         self._leader_travel_m = 0.0
         self._blocked_steps = 0
         self._stuck = 0
+        # the whole step in one compiled call (steering_kernels.silent_step_kernel): a
+        # waypoint path, cost (13), free space; the path's per-segment values for it
+        traj = self.trajectory
+        self._path = None
+        if (
+            isinstance(traj, Polyline)
+            and self.cost == "desired_distance"
+            and not world.has_obstacles
+            and world.bounds_m is None
+        ):
+            self._path = (
+                traj.waypoints, traj._seg, np.array(traj._denom, dtype=float), traj._cum,
+                traj._seg_len, traj.length_m, traj.end, float(2 * self.d_max_m),
+                float(self.gamma), float(self.d0_m), float(self.d_max_m),
+                float(self.radial_error_m), float(self.angular_error_rad),
+                float(self.min_separation_m), bool(self.search_directions),
+            )  # fmt: skip
 
     def leader_target(self, position: np.ndarray, t_next_s: float, dt_s: float) -> np.ndarray:
         """Where the leader wants to be at ``t + dt`` (a carrot ahead on the path)."""
@@ -262,6 +280,13 @@ class SilentStrategy(Strategy):
     def step(self, ctx: StepContext) -> TeamState:
         self._step = ctx.step
         obs, state = ctx.obs, ctx.state
+        if (
+            self._path is not None
+            and steering._use_kernel(state.n)
+            and obs.measured.ndim == 2
+            and state.positions.ndim == 2
+        ):
+            return self._step_compiled(ctx)
         leader = self.leader
         target = self.leader_target(state.positions[leader], ctx.t_s + ctx.dt_s, ctx.dt_s)
         leader_step = target - state.positions[leader]
@@ -291,6 +316,27 @@ class SilentStrategy(Strategy):
         velocities = steps / ctx.dt_s
         self._update_done(new_positions[leader], ctx)
         return TeamState(new_positions, velocities)
+
+    def _step_compiled(self, ctx: StepContext) -> TeamState:
+        """:meth:`step` in one call of :func:`tether.silent.steering_kernels.silent_step_kernel`
+        (the same arithmetic: the same positions, progress and leader statistics)."""
+        obs, state = ctx.obs, ctx.state
+        max_step = np.inf if self.max_speed_mps is None else self.max_speed_mps * ctx.dt_s
+        positions, velocities, (progress, wanted, moved, gap) = (
+            steering._kernels().silent_step_kernel(
+                np.ascontiguousarray(state.positions, dtype=float),
+                np.ascontiguousarray(obs.measured, dtype=float),
+                obs.indptr.astype(np.int64, copy=False), self.leader, *self._path,
+                float(self.progress_m), float(self.speed_mps * ctx.dt_s), float(ctx.dt_s),
+                float(max_step),
+            )
+        )  # fmt: skip
+        self.progress_m = progress
+        if wanted > 1e-9 and moved < 0.05 * wanted:
+            self._blocked_steps += 1
+        self._leader_travel_m += moved
+        self._done = bool(gap <= self.goal_tolerance_m)
+        return TeamState(positions, velocities)
 
     def _avoid_obstacles(self, positions: np.ndarray, steps: np.ndarray) -> np.ndarray:
         """Halve steps (direction kept) until their segments stay in free space."""
