@@ -92,3 +92,41 @@ def warm_up() -> None:
     groups = np.array([[0, 0, 1, 2, 3], [4, 4, 5, -1, -1], [6, 6, 7, -1, -1]], dtype=np.int64)
     merge_kernel(np.zeros((2, 8)), recv, vals, valid, groups, 0, 2, 3)
     consensus_kernel(np.zeros(2), recv, vals[:, 0].copy(), valid, 0.5)
+
+
+@njit(cache=True)
+def election_busy_before(token, msg, opened_round, joined, wants, candidate, idle, active,
+                         no_token, epoch, result):  # noqa: ANN001, ANN201  # fmt: skip
+    """Whether a round of :meth:`~tether.continuous.election.Election.round` opens an
+    election or takes a candidacy before its exchange (the same tests, robot by robot).
+
+    False lets the caller skip both steps: they would do nothing.
+    """
+    for h in range(len(token)):
+        if token[h] != no_token and (token[h] == idle or (token[h] == active and wants[h]
+                                                          and opened_round[h] < 0)):  # fmt: skip
+            return True
+    for i in range(len(token)):
+        e = msg[i, epoch]
+        if candidate[i] and e > msg[i, result] and e > 0 and joined[i] < e:
+            return True
+    return False
+
+
+@njit(cache=True)
+def election_busy_after(token, msg, opened_round, handled, rounds, wait_rounds, hosting,
+                        active, transit, result, winner):  # noqa: ANN001, ANN201  # fmt: skip
+    """Whether a round of :meth:`~tether.continuous.election.Election.round` decides an
+    election, delivers a result to its winner or moves a token in transit after its
+    exchange (the same tests). False lets the caller skip those steps.
+    """
+    for h in range(len(token)):
+        t = token[h]
+        if t == transit:
+            return True
+        if (t == hosting or t == active) and opened_round[h] >= 0 \
+                and rounds - opened_round[h] >= wait_rounds:  # fmt: skip
+            return True
+        if msg[h, result] > handled[h] and msg[h, winner] == h:
+            return True
+    return False
