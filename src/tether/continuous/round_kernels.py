@@ -124,8 +124,8 @@ def election_busy_after(token, msg, opened_round, handled, rounds, wait_rounds, 
         t = token[h]
         if t == transit:
             return True
-        if (t == hosting or t == active) and opened_round[h] >= 0 \
-                and rounds - opened_round[h] >= wait_rounds:  # fmt: skip
+        hosts = t == hosting or t == active  # noqa: SIM109  (numba: no tuple membership)
+        if hosts and opened_round[h] >= 0 and rounds - opened_round[h] >= wait_rounds:
             return True
         if msg[h, result] > handled[h] and msg[h, winner] == h:
             return True

@@ -185,6 +185,7 @@ class PathSet:
         return PathState(s_best, point, dist, remaining, v[:, None] * tan,
                          (v * v)[:, None] * kap)  # fmt: skip
 
+
 def path_states(
     paths: list[TrackedPath], q: np.ndarray, v_cruise_mps: np.ndarray | float
 ) -> PathState:
