@@ -166,3 +166,44 @@ def test_election_skipping_idle_phases_changes_nothing(seed: int) -> None:
     for x, y in zip(fast[1][:5], ref[1][:5], strict=True):
         np.testing.assert_array_equal(x, y)
     assert fast[1][5] == ref[1][5]
+
+
+@pytest.mark.parametrize("name", ["multi_target_town", "multi_target_office"])
+def test_sensing_on_a_grid_in_one_call_is_the_reference(name: str) -> None:
+    """Range, line of sight and CSR in one compiled call: the reference's observation."""
+    import numba  # noqa: F401  (the compiled pair search runs once numba is loaded)
+
+    from tether.config import load_scenario
+    from tether.runner import build
+    from tether.sensing import sense
+    from tether.sensing.robots import _los_grid, sensed_pairs
+
+    sc = load_scenario(name)
+    b = build(sc, sc.seed)
+    world, sensor = b.world, b.sensor
+    _ = world.grid.distance_field_m  # made: the kernel skips samples by it
+    lo, hi = world.bounds_m
+    rng = np.random.default_rng(1)
+    blocked = 0
+    for trial in range(30):
+        n = 35
+        centre = rng.uniform(lo, hi)
+        q = centre + rng.normal(0, [3.0, 8.0, 20.0][trial % 3], (n, world.dim))
+        q = np.clip(q, lo, hi)
+        with jit.using(True):
+            assert _los_grid(world, sensor, n) is world.grid
+            fast = sense(q, sensor, np.random.default_rng(trial), world)
+        with jit.using(False):
+            ref = sense(q, sensor, np.random.default_rng(trial), world)
+        for x, y in zip(vars(fast).values(), vars(ref).values(), strict=True):
+            assert np.asarray(x).dtype == np.asarray(y).dtype
+            np.testing.assert_array_equal(x, y)
+        # oracle: the pairs in range minus those the grid's line of sight blocks
+        in_range = [(i, j) for i in range(n) for j in range(i + 1, n)
+                    if np.sum((q[i] - q[j]) ** 2) <= sensor.range_m**2]  # fmt: skip
+        with jit.using(False):
+            clear = [p for p in in_range if world.segments_clear(q[p[0]][None], q[p[1]][None])[0]]
+            assert [tuple(p) for p in sensed_pairs(q, sensor, world).tolist()] == clear
+        assert [tuple(p) for p in fast.pairs.tolist()] == clear
+        blocked += len(in_range) - len(clear)
+    assert blocked > 0  # some pairs in range were out of sight
