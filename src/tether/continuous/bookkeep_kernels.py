@@ -61,3 +61,11 @@ def min_link_distance_kernel(q, pairs):  # noqa: ANN001, ANN201
         if s < best:
             best = s
     return math.sqrt(best)
+
+
+def warm_up() -> None:
+    """Compile (or load) the kernels for 2-D and 3-D teams."""
+    for dim in (2, 3):
+        q = np.zeros((3, dim))
+        travel_stretch_kernel(np.zeros(3), q, q + 1.0, np.ones(3, dtype=np.bool_))
+        min_link_distance_kernel(q, np.array([[0, 1]], dtype=np.int64))

@@ -84,16 +84,6 @@ def consensus_kernel(estimate, recv, values, valid, gain_dt):  # noqa: ANN001, A
     return new
 
 
-def warm_up() -> None:
-    """Compile (or load) both kernels on a two-robot inbox."""
-    recv = np.array([0, 1], dtype=np.int64)
-    vals = np.zeros((2, 8))
-    valid = np.ones(2, dtype=np.bool_)
-    groups = np.array([[0, 0, 1, 2, 3], [4, 4, 5, -1, -1], [6, 6, 7, -1, -1]], dtype=np.int64)
-    merge_kernel(np.zeros((2, 8)), recv, vals, valid, groups, 0, 2, 3)
-    consensus_kernel(np.zeros(2), recv, vals[:, 0].copy(), valid, 0.5)
-
-
 @njit(cache=True)
 def election_busy_before(token, msg, opened_round, joined, wants, candidate, idle, active,
                          no_token, epoch, result):  # noqa: ANN001, ANN201  # fmt: skip
@@ -130,3 +120,21 @@ def election_busy_after(token, msg, opened_round, handled, rounds, wait_rounds, 
         if msg[h, result] > handled[h] and msg[h, winner] == h:
             return True
     return False
+
+
+def warm_up() -> None:
+    """Compile (or load) the round kernels on a two-robot inbox, and the control step's
+    bookkeeping kernels (:mod:`tether.continuous.bookkeep_kernels`) with them."""
+    from tether.continuous.bookkeep_kernels import warm_up as bookkeep
+
+    recv = np.array([0, 1], dtype=np.int64)
+    vals = np.zeros((2, 8))
+    valid = np.ones(2, dtype=np.bool_)
+    groups = np.array([[0, 0, 1, 2, 3], [4, 4, 5, -1, -1], [6, 6, 7, -1, -1]], dtype=np.int64)
+    merge_kernel(np.zeros((2, 8)), recv, vals, valid, groups, 0, 2, 3)
+    consensus_kernel(np.zeros(2), recv, vals[:, 0].copy(), valid, 0.5)
+    token, opened, count = np.zeros(2, np.int64), np.full(2, -1), np.zeros(2, np.int64)
+    flags = np.zeros(2, dtype=np.bool_)
+    election_busy_before(token, vals, opened, count, flags, flags, 1, 2, 0, 0, 4)
+    election_busy_after(token, vals, opened, count, 1, 2, 3, 2, 4, 4, 5)
+    bookkeep()

@@ -276,6 +276,10 @@ def warm_up() -> None:
         pairs = np.array([[0, 1], [0, 2], [1, 2]], np.int64)
         occluded_kernel(pos, pairs, 0.5)
         sense_pairs_kernel(pos, 3.0, 0.5)
+        free = np.ones(4**dim, dtype=np.bool_)
+        shape = np.full(dim, 4, dtype=np.int64)
+        for field in (np.zeros(0), np.ones(4**dim)):
+            sense_grid_kernel(pos, 3.0, free, shape, np.full(dim, -1.0), 1.0, 0.5, field)
         _, _, rel = directed_kernel(pairs, pos, 3)
         k = len(rel)
         flips = np.ones(k, np.uint8)
