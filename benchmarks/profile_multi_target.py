@@ -5,7 +5,10 @@ Wraps the strategy's main calls with ``time.process_time`` counters and runs one
 median control step (CPU) and each part's CPU time per step, summed over the run (a
 part called in several places, such as the path states, counts every call; the A*
 plans of the start-up and of new targets are in ``roles.plan``). Works with older
-trees too (``PYTHONPATH=/tmp/old/src``); parts a tree does not have are left out.
+trees too (``PYTHONPATH=/tmp/old/src``); parts a tree does not have are left out (a tree
+that senses on a grid in one compiled call reports it as one part; ``path closest
+points`` are all closest-point queries, those of the roles' update counted in ``path
+states`` before).
 Run two trees at the same time to compare them under the same load.
 
 Usage::
@@ -33,7 +36,7 @@ acc: dict[str, float] = {}
 
 def wrap(obj: Any, name: str, label: str) -> None:
     """Count the CPU time of ``obj.name`` under ``label`` (if ``obj`` has it)."""
-    f = getattr(obj, name, None)
+    f = getattr(obj, name, None) if obj is not None else None
     if f is None:
         return
 
@@ -65,6 +68,11 @@ def main() -> None:
     import tether.continuous.tracking as tr
     import tether.continuous.weights as cw
     import tether.sensing.robots as sr
+
+    try:
+        import tether.sensing.robots_kernels as rk
+    except ImportError:  # a tree without it
+        rk = None
     import tether.world.clearance as wc
     import tether.world.grid as wg
 
@@ -77,6 +85,7 @@ def main() -> None:
         (co.EfficiencyConsensus, "round", "    consensus.round"),
         (comm.MessageLayer, "exchange", "      message exchange"),
         (tr.PathSet, "states", "    path states"),
+        (tr.PathSet, "closest", "    path closest points (all calls)"),
         (mt, "integrate", "  integrate"),
         (mt.MultiTargetStrategy, "_evaluate", "    evaluate"),
         (cw, "_evaluate_kernel", "      weights (kernel)"),
@@ -89,6 +98,7 @@ def main() -> None:
         (mt.MultiTargetStrategy, "sense", "sense"),
         (sr, "sensed_pairs", "  sensed pairs"),
         (wg.OccupancyGrid, "segments_clear", "    line of sight"),
+        (rk, "sense_grid_kernel", "  sensed pairs + line of sight (one call)"),
         (simmod, "team_metrics", "team metrics"),
         (simmod, "_graph_metrics", "  lambda2, components"),
     ]

@@ -40,6 +40,7 @@ KERNEL_MODULES = (
     "continuous/tracking_kernels.py",
     "continuous/force_kernels.py",
     "continuous/round_kernels.py",
+    "continuous/bookkeep_kernels.py",
     "comm_kernels.py",
     "world/clearance_kernels.py",
     "world/los_kernels.py",

@@ -122,6 +122,39 @@ class Election:
         """
         out = Outcome()
         m = self.msg
+        fast = jit.enabled()
+        if fast:
+            from tether.continuous.round_kernels import election_busy_after, election_busy_before
+        if not fast or election_busy_before(self.token, m, self.opened_round, self.joined,
+                                            wants_election, candidate, IDLE, ACTIVE, NO_TOKEN,
+                                            EPOCH, RESULT):  # fmt: skip
+            self._open_and_join(candidate, criterion, wants_election, out)
+        # flood: every robot merges what its neighbours sent (last values received)
+        inbox = self.layer.exchange(pairs, m)
+        self.rounds += 1
+        if fast:  # the same merge, compiled
+            from tether.continuous.round_kernels import merge_kernel
+
+            merge_kernel(m, inbox.receiver, inbox.values, inbox.valid, _GROUPS, EPOCH, BEST,
+                         BEST_IDX)  # fmt: skip
+        else:
+            ok = inbox.valid
+            self._merge(inbox.receiver[ok], inbox.values[ok])
+        if not fast or election_busy_after(self.token, m, self.opened_round, self.handled,
+                                           self.rounds, self.wait_rounds, HOSTING, ACTIVE,
+                                           TRANSIT, RESULT, WINNER):  # fmt: skip
+            self._decide(secondary, out)
+        return out
+
+    def _open_and_join(
+        self,
+        candidate: np.ndarray,
+        criterion: np.ndarray,
+        wants_election: np.ndarray,
+        out: Outcome,
+    ) -> None:
+        """Before the exchange: hosts open elections, candidates join the open ones."""
+        m = self.msg
         # hosts: the idle token holder polls; the active prime opens when it asks to
         for h in np.flatnonzero(self.token != NO_TOKEN):
             if self.token[h] == IDLE or (self.token[h] == ACTIVE and wants_election[h]
@@ -135,17 +168,10 @@ class Election:
                 m[i, BEST], m[i, BEST_IDX] = criterion[i], i
             self.joined[i] = int(m[i, EPOCH])
             self.candidates.setdefault(int(m[i, EPOCH]), []).append(int(i))
-        # flood: every robot merges what its neighbours sent (last values received)
-        inbox = self.layer.exchange(pairs, m)
-        self.rounds += 1
-        if jit.enabled():  # the same merge, compiled
-            from tether.continuous.round_kernels import merge_kernel
 
-            merge_kernel(m, inbox.receiver, inbox.values, inbox.valid, _GROUPS, EPOCH, BEST,
-                         BEST_IDX)  # fmt: skip
-        else:
-            ok = inbox.valid
-            self._merge(inbox.receiver[ok], inbox.values[ok])
+    def _decide(self, secondary: np.ndarray, out: Outcome) -> None:
+        """After the exchange: hosts decide, winners take or decline, tokens in transit land."""
+        m = self.msg
         # hosts decide after 2(N - 1) rounds
         for h in np.flatnonzero((self.token == HOSTING) | (self.token == ACTIVE)):
             if self.opened_round[h] < 0 or self.rounds - self.opened_round[h] < self.wait_rounds:
@@ -172,7 +198,6 @@ class Election:
                 self.token[h] = NO_TOKEN
             elif m[h, ACK] == m[h, RESULT] and m[h, RESULT] > 0:
                 self.token[h] = NO_TOKEN if m[h, ACK_CODE] == TAKEN else IDLE
-        return out
 
     def _merge(self, recv: np.ndarray, vals: np.ndarray) -> None:
         """Each robot adopts the newest election, result and acknowledgement it heard."""

@@ -140,6 +140,8 @@ def travel_gains(p: MultiTargetParams) -> tuple[float, ...]:
             p.sigma, p.rz_m, p.kz_n)  # fmt: skip
 
 
+_ROLE_ARRAY = np.array(ROLE_NAMES)  # role names by role code
+
 _i0, _f1, _f2 = np.zeros(1, np.int64), np.zeros(0), np.zeros((0, 3))
 #: path arguments of the traveling kernel when nobody travels (the types of a PathSet's)
 _NO_PATHS = (_i0, _f2, _f2, _f1, _f1, _f1, _f2, _f2, _f2, _f2, _f1, _f1, _f1, _i0[:0])
@@ -374,11 +376,19 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     def _bookkeep(self, q: np.ndarray, q_new: np.ndarray, lam: float, t_s: float, dt: float):
         pl = self.planner
-        self._travelled += np.linalg.norm(q_new - q, axis=1)
-        ex = np.flatnonzero(pl.explorer)
-        if len(ex) > 1:
-            d = np.linalg.norm(q_new[ex, None] - q_new[None, ex], axis=-1)
-            self._stretch = max(self._stretch, float(d.max()))
+        if jit.enabled():  # the same sums and maximum, compiled
+            from tether.continuous.bookkeep_kernels import travel_stretch_kernel
+
+            far = travel_stretch_kernel(self._travelled, np.ascontiguousarray(q),
+                                        np.ascontiguousarray(q_new), pl.explorer)  # fmt: skip
+            if far >= 0.0:
+                self._stretch = max(self._stretch, far)
+        else:
+            self._travelled += np.linalg.norm(q_new - q, axis=1)
+            ex = np.flatnonzero(pl.explorer)
+            if len(ex) > 1:
+                d = np.linalg.norm(q_new[ex, None] - q_new[None, ex], axis=-1)
+                self._stretch = max(self._stretch, float(d.max()))
         if np.isfinite(lam):
             self._lambda_sum += lam
             self._lambda_count += 1
@@ -403,16 +413,18 @@ class MultiTargetStrategy(ConnectivityStrategy):
     # -- results ---------------------------------------------------------------------
     def step_values(self) -> dict[str, Any]:
         role = self.planner.role
+        primes = np.flatnonzero(role == PRIME)
+        count = np.bincount(role, minlength=len(ROLE_NAMES))
         return {
             "lambda2_weighted": float(self._current[0]) if self._current else float("nan"),
-            "prime": int(np.flatnonzero(role == PRIME)[0]) if (role == PRIME).any() else -1,
-            "n_travelers": int(((role == PRIME) | (role == SECONDARY)).sum()),
-            "n_anchors": int((role == ANCHOR).sum()),
+            "prime": int(primes[0]) if len(primes) else -1,
+            "n_travelers": int(count[PRIME] + count[SECONDARY]),
+            "n_anchors": int(count[ANCHOR]),
             "prime_efficiency": self._prime_eff,
         }
 
     def robot_values(self) -> dict[str, np.ndarray]:
-        out = {"role": np.array([ROLE_NAMES[r] for r in self.planner.role])}
+        out = {"role": _ROLE_ARRAY[self.planner.role]}
         if self.filter is not None:  # the reference of eq. (16), from step 1 on
             for d, axis in zip(range(self.filter.position.shape[1]), "xyz", strict=False):
                 out[f"{axis}_ref_m"] = self.filter.position[:, d].copy()

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from tether import jit
 from tether.continuous.targets import Target, TargetBook
 from tether.continuous.tracking import PathSet, TrackedPath
 from tether.paths.astar import plan_path, planning_grid
@@ -74,7 +75,9 @@ class RolePlanner:
         self.stall_timeout_s = stall_timeout_s
         self.emit = emit
         self.role = np.full(n, CONNECTOR)
-        self.target: list[Target | None] = [None] * n
+        self.target: list[Target | None] = [None] * n  # written only through _assign
+        self._goal_m = np.full((n, world.dim), np.nan)  # the targets' positions (nan: none)
+        self._has_target = np.zeros(n, dtype=bool)
         self._paths: list[TrackedPath | None] = [None] * n
         self._set: tuple[np.ndarray, PathSet] | None = None
         self.inside_since = np.full(n, np.nan)  # when the robot entered Rz of its target
@@ -107,6 +110,12 @@ class RolePlanner:
         return self._set
 
     # -- helpers ---------------------------------------------------------------------
+    def _assign(self, robot: int, z: Target | None) -> None:
+        """Set ``robot``'s current target (and the arrays that mirror the list)."""
+        self.target[robot] = z
+        self._has_target[robot] = z is not None
+        self._goal_m[robot] = np.nan if z is None else z.position_m
+
     def set_role(self, robot: int, role: int, t_s: float) -> None:
         if role == PRIME:  # a new prime starts its progress watch
             self.progress[robot], self.progress_at[robot] = np.inf, np.nan
@@ -125,6 +134,16 @@ class RolePlanner:
         return TrackedPath.from_spline(smooth_path(waypoints, self.world, planning=self._planning))
 
     def distance_to_target(self, q: np.ndarray) -> np.ndarray:
+        """``|q_i - z_i|`` per robot (``inf``: no target).
+
+        With kernels on (:func:`tether.jit.enabled`), one row-wise norm over the array of
+        target positions; otherwise robot by robot (the reference). ``numpy.linalg.norm``
+        sums a row's squares in coordinate order either way (``tests/test_roles_fast.py``).
+        """
+        if jit.enabled():
+            d = np.linalg.norm(q - self._goal_m, axis=1)
+            d[~self._has_target] = np.inf
+            return d
         d = np.full(len(q), np.inf)
         for i, z in enumerate(self.target):
             if z is not None:
@@ -135,7 +154,9 @@ class RolePlanner:
         """Distance to the path and remaining length ``d_gamma`` per robot (``inf``: no path)."""
         dist, remaining = np.full(len(q), np.inf), np.full(len(q), np.inf)
         robots, paths = self.path_set()
-        if len(robots):
+        if len(robots) and jit.enabled():  # the kernel's closest points (kept for the election)
+            _, _, dist[robots], remaining[robots], _, _ = paths.closest(q[robots])
+        elif len(robots):
             st = paths.states(q[robots], 0.0)
             dist[robots], remaining[robots] = st.distance_m, st.remaining_m
         return dist, remaining
@@ -144,14 +165,14 @@ class RolePlanner:
         z = self.target[robot]
         self.emit("target_dropped", robot, t_s=t_s, target=z.id, reason=reason)
         self.dropped += 1
-        self.target[robot] = None
+        self._assign(robot, None)
         self.set_path(robot, None)
         self.inside_since[robot] = np.nan
 
     def take_next(self, robot: int, q: np.ndarray, t_s: float) -> bool:
         """Take the next available target with a path; drop unreachable ones. True if taken."""
         while (z := self.book.take(robot, t_s)) is not None:
-            self.target[robot] = z
+            self._assign(robot, z)
             self.explorer[robot] = True
             self.taken_at[robot] = t_s
             path = self.plan(robot, q)
@@ -177,8 +198,13 @@ class RolePlanner:
         off_path, remaining = self.on_path(q)
         self._watch(remaining, t_s)
         wants = np.zeros(len(q), dtype=bool)
+        # Python scalars for the loop (the same float64 values): robot i's iteration
+        # changes only robot i's role, distance and times, read before it starts
+        roles, dist_l, off_l = self.role.tolist(), dist.tolist(), off_path.tolist()
         for i in range(len(q)):
-            role, z = self.role[i], self.target[i]
+            role, z = roles[i], self.target[i]
+            if role == CONNECTOR and not self.book.queues[i]:
+                continue  # nothing to take up (take_next would find nothing)
             if z is not None and z.timeout_s is not None and role in (PRIME, SECONDARY) \
                     and t_s - self.taken_at[i] > z.timeout_s:  # fmt: skip
                 self.drop(i, t_s, "expired")
@@ -190,18 +216,18 @@ class RolePlanner:
                 if self.take_next(i, q[i], t_s):
                     self.set_role(i, SECONDARY, t_s)
             elif role == PRIME:
-                if z is None or dist[i] < self.rz_m:  # reached (or dropped): succession
+                if z is None or dist_l[i] < self.rz_m:  # reached (or dropped): succession
                     if self._paths[i] is not None:
                         self.set_path(i, None)
                     if z is not None and np.isnan(self.inside_since[i]):
                         self.inside_since[i] = t_s
                     wants[i] = True
             elif role == SECONDARY:
-                self._secondary(i, q[i], dist[i], off_path[i], t_s)
+                self._secondary(i, q[i], dist_l[i], off_l[i], t_s)
             elif role == ANCHOR and t_s - self.inside_since[i] >= z.stay_s - 1e-9:
                 self.emit("target_reached", i, t_s=t_s, target=z.id)
                 self.reached += 1
-                self.target[i] = None
+                self._assign(i, None)
                 self.inside_since[i] = np.nan
                 self.set_role(i, CONNECTOR, t_s)
         return wants
@@ -247,14 +273,14 @@ class RolePlanner:
     def anchored(self) -> np.ndarray:
         """Robots held at their target by ``f_anchor``: anchors, and a prime awaiting succession."""
         holding = (self.role == ANCHOR) | ((self.role == PRIME) & ~np.isnan(self.inside_since))
-        return holding & np.array([z is not None for z in self.target])
+        return holding & self._has_target
 
     def done(self) -> bool:
         """No target left anywhere: every queue empty, nobody traveling or anchored."""
         return self.book.pending() == 0 and all(z is None for z in self.target)
 
     def targets_of(self, robots: np.ndarray) -> np.ndarray:
-        return np.array([self.target[i].position_m for i in robots]).reshape(len(robots), -1)
+        return self._goal_m[np.asarray(robots, dtype=np.intp)].reshape(len(robots), -1)
 
     def summary(self) -> dict[str, Any]:
         return {

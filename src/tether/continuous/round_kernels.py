@@ -84,11 +84,57 @@ def consensus_kernel(estimate, recv, values, valid, gain_dt):  # noqa: ANN001, A
     return new
 
 
+@njit(cache=True)
+def election_busy_before(token, msg, opened_round, joined, wants, candidate, idle, active,
+                         no_token, epoch, result):  # noqa: ANN001, ANN201  # fmt: skip
+    """Whether a round of :meth:`~tether.continuous.election.Election.round` opens an
+    election or takes a candidacy before its exchange (the same tests, robot by robot).
+
+    False lets the caller skip both steps: they would do nothing.
+    """
+    for h in range(len(token)):
+        if token[h] != no_token and (token[h] == idle or (token[h] == active and wants[h]
+                                                          and opened_round[h] < 0)):  # fmt: skip
+            return True
+    for i in range(len(token)):
+        e = msg[i, epoch]
+        if candidate[i] and e > msg[i, result] and e > 0 and joined[i] < e:
+            return True
+    return False
+
+
+@njit(cache=True)
+def election_busy_after(token, msg, opened_round, handled, rounds, wait_rounds, hosting,
+                        active, transit, result, winner):  # noqa: ANN001, ANN201  # fmt: skip
+    """Whether a round of :meth:`~tether.continuous.election.Election.round` decides an
+    election, delivers a result to its winner or moves a token in transit after its
+    exchange (the same tests). False lets the caller skip those steps.
+    """
+    for h in range(len(token)):
+        t = token[h]
+        if t == transit:
+            return True
+        hosts = t == hosting or t == active  # noqa: SIM109  (numba: no tuple membership)
+        if hosts and opened_round[h] >= 0 and rounds - opened_round[h] >= wait_rounds:
+            return True
+        if msg[h, result] > handled[h] and msg[h, winner] == h:
+            return True
+    return False
+
+
 def warm_up() -> None:
-    """Compile (or load) both kernels on a two-robot inbox."""
+    """Compile (or load) the round kernels on a two-robot inbox, and the control step's
+    bookkeeping kernels (:mod:`tether.continuous.bookkeep_kernels`) with them."""
+    from tether.continuous.bookkeep_kernels import warm_up as bookkeep
+
     recv = np.array([0, 1], dtype=np.int64)
     vals = np.zeros((2, 8))
     valid = np.ones(2, dtype=np.bool_)
     groups = np.array([[0, 0, 1, 2, 3], [4, 4, 5, -1, -1], [6, 6, 7, -1, -1]], dtype=np.int64)
     merge_kernel(np.zeros((2, 8)), recv, vals, valid, groups, 0, 2, 3)
     consensus_kernel(np.zeros(2), recv, vals[:, 0].copy(), valid, 0.5)
+    token, opened, count = np.zeros(2, np.int64), np.full(2, -1), np.zeros(2, np.int64)
+    flags = np.zeros(2, dtype=np.bool_)
+    election_busy_before(token, vals, opened, count, flags, flags, 1, 2, 0, 0, 4)
+    election_busy_after(token, vals, opened, count, 1, 2, 3, 2, 4, 4, 5)
+    bookkeep()

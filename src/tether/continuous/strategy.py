@@ -30,6 +30,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from tether import jit
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.dynamics import IntegratorParams, integrate
 from tether.continuous.estimation import EstimatorParams, FiedlerEstimator, estimate_errors
@@ -359,7 +360,13 @@ class ConnectivityStrategy(Strategy):
             lam, nu = graph.fiedler(guess=self._nu, state=self._warm, method=method)
         if np.isfinite(lam):
             self._min["lambda2"] = min(self._min["lambda2"], float(lam))
-        if len(graph.pairs):
+        if len(graph.pairs) and jit.enabled():  # the same minimum, compiled
+            from tether.continuous.bookkeep_kernels import min_link_distance_kernel
+
+            d_min = min_link_distance_kernel(np.ascontiguousarray(q, dtype=float),
+                                             np.ascontiguousarray(graph.pairs))  # fmt: skip
+            self._min["distance"] = min(self._min["distance"], d_min)
+        elif len(graph.pairs):
             d = np.linalg.norm(q[graph.pairs[:, 0]] - q[graph.pairs[:, 1]], axis=1)
             self._min["distance"] = min(self._min["distance"], float(d.min()))
         if self.obstacles.tree is not None:  # robots the field puts farther are not searched

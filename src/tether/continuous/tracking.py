@@ -97,6 +97,7 @@ class PathSet:
         self._kernel: tuple[np.ndarray, ...] | None = None  # the kernel's arrays, made once
         # the kernel's last positions and closest points (without the speed)
         self._last: tuple[np.ndarray, tuple[np.ndarray, ...]] | None = None
+        self._zeros: np.ndarray | None = None  # the kernel's speeds in :meth:`closest`
 
     def states(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
         """Closest point (largest arc length among ties) and virtual point of each robot.
@@ -153,25 +154,36 @@ class PathSet:
                             end - offset, np.full(self.r, -1))  # fmt: skip
         return self._kernel
 
-    def _states_kernel(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
-        """:meth:`states` by :func:`tether.continuous.kernels.path_states_kernel` (same bits)."""
+    def closest(self, q: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``(s, point, distance, remaining, tangent, d2p/ds2)`` at the closest points.
+
+        The speed-free part of :meth:`states`, by
+        :func:`~tether.continuous.tracking_kernels.path_states_kernel` (same bits); the
+        last positions' answer is kept, so asking again for the same ``q`` (the roles,
+        then the election) costs a comparison.
+        """
+        q = np.ascontiguousarray(q, dtype=float)
+        last = self._last
+        if last is not None and last[0].shape == q.shape and (last[0] == q).all():
+            return last[1]
         from tether.continuous.tracking_kernels import path_states_kernel
         from tether.world.clearance import einsum_order
 
         args = self.kernel_args()
-        speed = np.broadcast_to(np.asarray(v_cruise_mps, dtype=float), (self.r,))
-        q = np.ascontiguousarray(q, dtype=float)
-        last = self._last
-        if last is not None and last[0].shape == q.shape and np.array_equal(last[0], q):
-            # the same positions again (the roles, then the election): only the speed differs
-            s_best, point, dist, remaining, tan, kap = last[1]
-            v = speed * ((self.lengths - s_best) > 1e-9)  # the kernel's arithmetic
-            return PathState(s_best, point, dist, remaining, v[:, None] * tan,
-                             (v * v)[:, None] * kap)  # fmt: skip
-        out = path_states_kernel(q, *args[:11], np.ascontiguousarray(speed), TIE_M,
-                                 einsum_order(), *args[11:])  # fmt: skip
+        if self._zeros is None:
+            self._zeros = np.zeros(self.r)
+        out = path_states_kernel(q, *args[:11], self._zeros, TIE_M, einsum_order(),
+                                 *args[11:])  # fmt: skip
         self._last = (q.copy(), out[:4] + out[6:])
-        return PathState(*out[:6])
+        return self._last[1]
+
+    def _states_kernel(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
+        """:meth:`states` by :func:`tether.continuous.kernels.path_states_kernel` (same bits)."""
+        s_best, point, dist, remaining, tan, kap = self.closest(q)
+        # velocity and acceleration in the kernel's arithmetic: v T and v^2 d2p/ds2
+        v = np.asarray(v_cruise_mps, dtype=float) * ((self.lengths - s_best) > 1e-9)
+        return PathState(s_best, point, dist, remaining, v[:, None] * tan,
+                         (v * v)[:, None] * kap)  # fmt: skip
 
 
 def path_states(

@@ -82,32 +82,42 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
     kap = np.empty((r_count, dim))
     rel = np.empty(dim)
     off = np.empty(dim)
+    most = 0
+    for r in range(r_count):
+        most = max(most, first[r + 1] - first[r])
+    cand_k = np.empty(most, np.int64)  # segments within tie of the least distance so far
+    cand_t = np.empty(most)
+    cand_d = np.empty(most)
     for r in range(r_count):
         lo, hi = first[r], first[r + 1]
         best = np.inf
         if lo <= hint[r] < hi:
             best = _foot(q, r, pa, dseg, inv_len2, hint[r], order, rel, off)[1]
+        # one pass: the least distance, and every segment within tie of the least so far
+        # (it only shrinks, and the skipping is exact, so no segment within tie of the
+        # final least is skipped or left out); then, in segment order, the largest arc
+        # length among those within tie of the final least (the first of equals)
+        count = 0
         k = lo
-        while k < hi:  # the least distance
-            j = _skip_to(q, r, pa, chord_start, chord_end, k, hi, best + tie)
-            if j > k:
-                k = j
-                continue
-            best = min(best, _foot(q, r, pa, dseg, inv_len2, k, order, rel, off)[1])
-            k += 1
-        s_max, pick, t_pick, d_pick = -np.inf, -1, 0.0, 0.0
-        k = lo
-        while k < hi:  # the largest arc length within tie of it
+        while k < hi:
             j = _skip_to(q, r, pa, chord_start, chord_end, k, hi, best + tie)
             if j > k:
                 k = j
                 continue
             t, dk = _foot(q, r, pa, dseg, inv_len2, k, order, rel, off)
+            best = min(best, dk)
             if dk <= best + tie:
+                cand_k[count], cand_t[count], cand_d[count] = k, t, dk
+                count += 1
+            k += 1
+        s_max, pick, t_pick, d_pick = -np.inf, -1, 0.0, 0.0
+        for c_i in range(count):
+            dk = cand_d[c_i]
+            if dk <= best + tie:
+                k, t = cand_k[c_i], cand_t[c_i]
                 s_foot = sa[k] + t * ds[k]
                 if s_foot > s_max:
                     s_max, pick, t_pick, d_pick = s_foot, k, t, dk
-            k += 1
         hint[r] = pick
         s_best[r] = s_max
         dist_out[r] = d_pick

@@ -26,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cache
 from types import ModuleType
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from tether import jit
 from tether.geometry import random_perpendicular, unit
 from tether.graph import expand_rows, pairs_within
 from tether.graph.structure import KERNEL_PAIRS_MAX_N
+from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
 NoiseKind = Literal["none", "uniform", "bound"]
@@ -196,6 +197,29 @@ def sensed_pairs(
     return pairs[keep]
 
 
+_NO_FIELD = np.zeros(0)
+
+
+def _los_grid(world: World | None, sensor: SensorModel, n: int) -> Any:
+    """The occupancy grid :func:`sensed_pairs` tests line of sight on, when
+    :func:`~tether.sensing.robots_kernels.sense_grid_kernel` gives its pairs exactly.
+
+    That is: a small team (compiled pair search, :func:`tether.jit.warm`), no occlusion,
+    a world whose ``segments_clear`` is the grid's (samples every half cell, no
+    clearance) and a C-ordered free mask (the compiled line of sight). ``None`` otherwise.
+    """
+    if world is None or not world.has_obstacles or world.grid is None or n > KERNEL_PAIRS_MAX_N:
+        return None
+    if sensor.occlusion and sensor.body_radius_m > 0:
+        return None
+    grid = world.grid
+    if type(world).segments_clear is not World.segments_clear or not jit.warm():
+        return None
+    if type(grid).segments_clear is not OccupancyGrid.segments_clear:
+        return None
+    return grid if grid.free_mask().flags.c_contiguous else None
+
+
 def _noisy(rel: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
     if sensor.noise == "none" or len(rel) == 0:
         return rel.copy()
@@ -269,6 +293,7 @@ def sense(
     n = len(positions)
     if _use_kernel(n) and positions.ndim == 2 and positions.shape[1] in (2, 3):
         kernels = _kernels()
+        grid = _los_grid(world, sensor, n)
         if n <= KERNEL_PAIRS_MAX_N and (world is None or not world.has_obstacles):
             radius = float(sensor.body_radius_m) if sensor.occlusion else 0.0
             if positions.shape[1] == 2 and kernels.numpy_trig_is_libm():  # one call
@@ -282,6 +307,17 @@ def sense(
             pairs, indptr, target, rel = kernels.sense_pairs_kernel(
                 positions, float(sensor.range_m), radius
             )
+        elif grid is not None:  # range, line of sight and CSR in one call (same pairs)
+            free = grid.free_mask()
+            to_cells = 1.0 / grid.resolution_m
+            field = grid.__dict__.get("distance_field_m")  # as segments_clear passes it
+            if field is None or not field.flags.c_contiguous:
+                field = _NO_FIELD
+            pairs, indptr, target, rel = kernels.sense_grid_kernel(
+                positions, float(sensor.range_m), free.reshape(-1),
+                np.asarray(free.shape, dtype=np.int64), np.asarray(grid.origin_m, dtype=float),
+                to_cells, 0.5, field.reshape(-1),
+            )  # fmt: skip
         else:
             pairs = sensed_pairs(positions, sensor, world)
             indptr, target, rel = kernels.directed_kernel(pairs.astype(np.int64), positions, n)

@@ -1,6 +1,6 @@
 """Compiled sensing of :mod:`tether.sensing.robots` (numba): occlusion, CSR, noise.
 
-Three kernels, each the arithmetic of its reference, term for term:
+The kernels, each the arithmetic of its reference, term for term:
 
 * :func:`occluded_kernel` -- :func:`~tether.sensing.robots._occluded`: robot ``j`` hides
   ``k`` from ``i`` when it is closer to both than they are to each other and its body
@@ -19,6 +19,8 @@ Three kernels, each the arithmetic of its reference, term for term:
   of :func:`~tether.sensing.draws_kernels.sensor_errors_kernel`, ``cos``/``sin`` of the
   angular errors and :func:`noise_kernel`; used only where numpy's ``cos``/``sin`` are
   the C library's, which the kernel calls (:func:`numpy_trig_is_libm`);
+* :func:`sense_grid_kernel` -- the same on an occupancy grid (range, line of sight,
+  CSR; no occlusion), the town and office teams' sensing in one call;
 * :func:`noise_kernel` -- the arithmetic of :func:`~tether.sensing.robots._noisy`
   (bounded radial and angular errors, the paper's Fig. 1) once its random numbers are
   drawn: the caller draws them with numpy's ``Generator`` in the reference's order and
@@ -39,6 +41,7 @@ from numba import njit
 
 from tether.graph.kernels import pairs_within_kernel
 from tether.sensing.draws_kernels import bitgen_addresses, sensor_errors_kernel
+from tether.world.los_kernels import segment_free_kernel
 
 EPS = 1e-12  # tether.geometry.unit's default
 
@@ -196,6 +199,38 @@ def sense_pairs_kernel(positions, range_m, body_radius_m):  # noqa: ANN001, ANN2
     return pairs, indptr, target, rel
 
 
+@njit(cache=True)
+def sense_grid_kernel(positions, range_m, free, shape, origin, to_cells, step_cells, field):  # noqa: ANN001, ANN201, PLR0913
+    """Sensed pairs on an occupancy grid (range, then line of sight), then ``_directed``.
+
+    The steps of :func:`~tether.sensing.robots.sensed_pairs` without occlusion in one
+    call: :func:`~tether.graph.kernels.pairs_within_kernel`, the segments' ends in cell
+    coordinates as :meth:`~tether.world.grid.OccupancyGrid.segments_clear` computes
+    them (``(p - origin) * to_cells``), :func:`~tether.world.los_kernels.segment_free_kernel`
+    on the raveled free mask ``free`` of ``shape`` (``field``: the distance field or
+    empty), the pairs in sight kept in order, and :func:`directed_kernel`.
+    """
+    n, dim = positions.shape
+    pairs = pairs_within_kernel(positions, range_m)
+    m = len(pairs)
+    if m:
+        a = np.empty((m, dim))
+        b = np.empty((m, dim))
+        for p in range(m):
+            for c in range(dim):
+                a[p, c] = (positions[pairs[p, 0], c] - origin[c]) * to_cells
+                b[p, c] = (positions[pairs[p, 1], c] - origin[c]) * to_cells
+        seen = segment_free_kernel(free, shape, a, b, step_cells, field, to_cells)
+        keep = 0
+        for p in range(m):
+            if seen[p]:
+                pairs[keep, 0], pairs[keep, 1] = pairs[p, 0], pairs[p, 1]
+                keep += 1
+        pairs = pairs[:keep].copy()
+    indptr, target, rel = directed_kernel(pairs, positions, n)
+    return pairs, indptr, target, rel
+
+
 @njit(cache=True, inline="always")
 def _unit_rows(v, i, out, j):  # noqa: ANN001, ANN202
     """``out[j] = unit(v[i])`` as :func:`tether.geometry.unit`; returns ``||v[i]||``."""
@@ -303,6 +338,10 @@ def warm_up() -> None:
         pairs = np.array([[0, 1], [0, 2], [1, 2]], np.int64)
         occluded_kernel(pos, pairs, 0.5)
         sense_pairs_kernel(pos, 3.0, 0.5)
+        free = np.ones(4**dim, dtype=np.bool_)
+        shape = np.full(dim, 4, dtype=np.int64)
+        for field in (np.zeros(0), np.ones(4**dim)):
+            sense_grid_kernel(pos, 3.0, free, shape, np.full(dim, -1.0), 1.0, 0.5, field)
         _, _, rel = directed_kernel(pairs, pos, 3)
         k = len(rel)
         flips = np.ones(k, np.uint8)
