@@ -460,6 +460,11 @@ def warm_up() -> float:
                         table, used, 0.25, fld, 1)  # fmt: skip
         evaluate_small_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, obs is not None, points_, tree,
                               table, used, 0.25, fld, 1, nu, small.SETTINGS)  # fmt: skip
+    from tether.continuous.step_kernels import warm_up as step_warm_up
+
+    states = [(obs is not None, no_obstacles(3) if obs is None else obs.kernel_state(3))
+              for obs in (None, index)]  # fmt: skip
+    step_warm_up(q, nu, small.SETTINGS, states)
     # every other kernel module's warm-up (imports here: numba only once asked for)
     from tether.comm_kernels import warm_up as comm
     from tether.continuous.round_kernels import warm_up as rounds

@@ -16,8 +16,8 @@ Parlett, "Multiple representations to compute orthogonal eigenvectors", 2004).
 
 from __future__ import annotations
 
-import numpy as np
 import llvmlite.binding as ll
+import numpy as np
 from numba import njit, types
 from numba.extending import get_cython_function_address
 
