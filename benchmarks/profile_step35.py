@@ -117,7 +117,7 @@ def main() -> None:
     r = a.repeat
 
     def step() -> None:
-        g = compute_weights(q, c, obs, guess=nu)
+        g = compute_weights(q, c, obs, guess=nu, with_force=True)
         l2, x = g.fiedler(guess=nu)
         f = exact_force(g, l2, x, c)
         semi_implicit_euler(q, v, f + ext, 1e-3, p.mass_kg, p.damping_ns_per_m)

@@ -203,7 +203,9 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
     ``auto`` runs it, in the fused kernel or in ``fiedler``."""
     import importlib
 
+    import tether.continuous.kernels as kernels
     import tether.continuous.step_kernels as step_kernels
+    import tether.continuous.weights as weights
     from tether.config import load_scenario
     from tether.runner import build
     from tether.sim import simulate
@@ -221,7 +223,8 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
         return original_fused(*args)
 
     monkeypatch.setattr(fiedler_module, "_small", counting_small)
-    monkeypatch.setattr(step_kernels, "evaluate_fiedler_kernel", counting_fused)
+    monkeypatch.setattr(weights, "_LOADED", [(kernels.evaluate_kernel, counting_fused,
+                                               kernels.no_obstacles)])  # fmt: skip
     sc = load_scenario("multi_target_empty")
     sc.team.n_robots = 20
     sc.strategy.params["fiedler_method"] = method

@@ -34,9 +34,9 @@ from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import smooth_step, smooth_step_log_derivative
 from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
-from tether.graph.fiedler import Method
+from tether.graph.fiedler import Method, _syevr_lwork
 from tether.graph.warm import WarmState
-from tether.world.clearance import ObstacleIndex
+from tether.world.clearance import ObstacleIndex, einsum_order
 
 
 @dataclass
@@ -225,6 +225,21 @@ def _compute_weights_kernel(
 _NO_CLEARANCE = (np.zeros(0), np.zeros(0), np.zeros((0, 3)))
 
 
+_LOADED: list = []
+
+
+def _kernels() -> tuple:
+    """``evaluate_kernel``, ``evaluate_fiedler_kernel`` and ``no_obstacles``, imported
+    on first use (numba only when kernels run; an import statement in the hot function
+    costs microseconds per call)."""
+    if not _LOADED:
+        from tether.continuous.kernels import evaluate_kernel, no_obstacles
+        from tether.continuous.step_kernels import evaluate_fiedler_kernel
+
+        _LOADED.append((evaluate_kernel, evaluate_fiedler_kernel, no_obstacles))
+    return _LOADED[0]
+
+
 def _evaluate_kernel(
     q: np.ndarray,
     params: ConnectivityParams,
@@ -235,9 +250,7 @@ def _evaluate_kernel(
 ) -> WeightedGraph:
     """Pairs, clearance, weights, ``W``, the dense Laplacian (and with ``guess`` the
     eigenpair, with ``with_force`` the force) in one kernel call."""
-    from tether.continuous.kernels import evaluate_kernel, no_obstacles
-    from tether.world.clearance import einsum_order
-
+    evaluate_kernel, evaluate_fiedler_kernel, no_obstacles = _kernels()
     q = np.ascontiguousarray(q)
     n, dim = q.shape
     has = obstacles is not None and obstacles.tree is not None and n > 1
@@ -248,9 +261,6 @@ def _evaluate_kernel(
     fused = (guess is not None and DENSE_MAX_N < n <= SUBSET_MAX_N and len(guess) == n
              and method in ("auto", "lapack"))  # fmt: skip
     if fused:
-        from tether.continuous.step_kernels import evaluate_fiedler_kernel
-        from tether.graph.fiedler import _syevr_lwork
-
         guess_c = np.ascontiguousarray(guess, dtype=float)
         potential = (params.lambda2_min, params.lambda2_null, params.potential_gain)
         lwork, liwork = _syevr_lwork(n)
