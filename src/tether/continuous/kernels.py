@@ -80,12 +80,15 @@ def pairs_in_range(q, r):  # noqa: ANN001, ANN201
     out = np.empty((cap, 2), np.int64)
     m = 0
     diff = np.empty(dim)
-    if n <= BRUTE_MAX_N:
+    if n <= BRUTE_MAX_N:  # _norm(diff) < r, the root taken only near r (as _pairs_dense_cells)
+        surely_in, surely_out = r * r * (1.0 - 1e-14), r * r * (1.0 + 1e-14)
         for i in range(n):
             for j in range(i + 1, n):
+                acc = 0.0
                 for d in range(dim):
-                    diff[d] = q[i, d] - q[j, d]
-                if _norm(diff) < r:
+                    x = q[i, d] - q[j, d]
+                    acc += x * x
+                if acc < surely_in or (acc <= surely_out and math.sqrt(acc) < r):
                     if m == len(out):
                         out = _grow(out)
                     out[m, 0], out[m, 1] = i, j
@@ -393,23 +396,6 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
     return pf, dP_di, dP_dj, clear, coll, coll_pairs, coll_unit, coll_logd, pairs, w, lap, added
 
 
-@njit(cache=True)
-def evaluate_small_kernel(  # noqa: ANN201, PLR0913
-    q, rs_inner, rs, ro, ro_outer, rc, rc_outer, obstacles, points, tree, table, used, slack,
-    field, order, guess, small,
-):  # noqa: ANN001  # fmt: skip
-    """:func:`evaluate_kernel` with the Laplacian, then :func:`~tether.graph.small_kernels.
-    small_fiedler_kernel` on it from ``guess`` with the settings ``small``: a sub-step's
-    weights and eigenpair in one call, the same bits as two. Returns the former's tuple
-    and the latter's ``(status, lambda2, vector)`` (-1: the clearance table must grow)."""
-    out = evaluate_kernel(q, rs_inner, rs, ro, ro_outer, rc, rc_outer, True, obstacles, points,
-                          tree, table, used, slack, field, order)  # fmt: skip
-    if out[-1] < 0:
-        return out, -1, 0.0, guess.copy()
-    status, lam, vec, _, _ = small_fiedler_kernel(out[10], guess, *small)
-    return out, status, lam, vec
-
-
 def warm_up() -> float:
     """Compile or load (from numba's cache) every kernel of the continuous strategies.
 
@@ -458,8 +444,6 @@ def warm_up() -> float:
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
-        evaluate_small_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, obs is not None, points_, tree,
-                              table, used, 0.25, fld, 1, nu, small.SETTINGS)  # fmt: skip
     from tether.continuous.step_kernels import warm_up as step_warm_up
 
     states = [(obs is not None, no_obstacles(3) if obs is None else obs.kernel_state(3))
