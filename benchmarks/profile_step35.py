@@ -30,12 +30,12 @@ import bench_continuous_step as bcs  # noqa: E402
 from tether.continuous.dynamics import semi_implicit_euler  # noqa: E402
 from tether.continuous.gradient import exact_force  # noqa: E402
 from tether.continuous.kernels import (  # noqa: E402
+    evaluate_fiedler_kernel,  # noqa: E402
     evaluate_kernel,
     no_obstacles,
     pairs_in_range,
     weights_kernel,
 )
-from tether.continuous.step_kernels import evaluate_fiedler_kernel  # noqa: E402
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
 from tether.continuous.weights import compute_weights  # noqa: E402
 from tether.graph import small  # noqa: E402

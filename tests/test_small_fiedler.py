@@ -204,7 +204,6 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
     import importlib
 
     import tether.continuous.kernels as kernels
-    import tether.continuous.step_kernels as step_kernels
     import tether.continuous.weights as weights
     from tether.config import load_scenario
     from tether.runner import build
@@ -212,7 +211,7 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
 
     fiedler_module = importlib.import_module("tether.graph.fiedler")  # not the function
     calls = {"small": 0}
-    original_small, original_fused = fiedler_module._small, step_kernels.evaluate_fiedler_kernel
+    original_small, original_fused = fiedler_module._small, kernels.evaluate_fiedler_kernel
 
     def counting_small(*args):  # noqa: ANN002, ANN202
         calls["small"] += 1

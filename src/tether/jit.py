@@ -39,7 +39,7 @@ KERNEL_MODULES = (
     "continuous/kernels.py",
     "continuous/tracking_kernels.py",
     "continuous/force_kernels.py",
-    "continuous/step_kernels.py",
+    "continuous/pair_kernels.py",
     "graph/lapack_kernels.py",
     "continuous/round_kernels.py",
     "comm_kernels.py",

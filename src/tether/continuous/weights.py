@@ -169,7 +169,7 @@ def compute_weights(
         The Fiedler vector the caller will pass to :meth:`WeightedGraph.fiedler`: with
         the kernels, a team of ``DENSE_MAX_N < n <= SUBSET_MAX_N`` robots gets its
         eigenpair in the same compiled call as its weights
-        (:func:`tether.continuous.step_kernels.evaluate_fiedler_kernel`);
+        (:func:`tether.continuous.kernels.evaluate_fiedler_kernel`);
         ``fiedler(guess=guess, method=method)`` then returns it (the same bits as
         computing it there).
     method
@@ -233,8 +233,11 @@ def _kernels() -> tuple:
     on first use (numba only when kernels run; an import statement in the hot function
     costs microseconds per call)."""
     if not _LOADED:
-        from tether.continuous.kernels import evaluate_kernel, no_obstacles
-        from tether.continuous.step_kernels import evaluate_fiedler_kernel
+        from tether.continuous.kernels import (
+            evaluate_fiedler_kernel,
+            evaluate_kernel,
+            no_obstacles,
+        )
 
         _LOADED.append((evaluate_kernel, evaluate_fiedler_kernel, no_obstacles))
     return _LOADED[0]
