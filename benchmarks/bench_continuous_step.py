@@ -115,7 +115,9 @@ def bench(world: World, n: int, solver: str, rounds: int, repeat: int, loss: flo
         connectivity_force(graph, lam, messages(graph, nu), c)
 
     def step() -> None:
-        g = compute_weights(q, c, obs, guess=nu if est is None else None)  # as the strategy
+        g = compute_weights(
+            q, c, obs, guess=nu if est is None else None, with_force=est is None
+        )  # as the strategy
         if est is None:
             l2, vec = g.fiedler(guess=nu, state=states["step"])
             f = exact_force(g, l2, vec, c)  # as the strategy's exact path

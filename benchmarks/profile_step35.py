@@ -30,8 +30,8 @@ import bench_continuous_step as bcs  # noqa: E402
 from tether.continuous.dynamics import semi_implicit_euler  # noqa: E402
 from tether.continuous.gradient import exact_force  # noqa: E402
 from tether.continuous.kernels import (  # noqa: E402
+    evaluate_fiedler_kernel,  # noqa: E402
     evaluate_kernel,
-    evaluate_small_kernel,
     no_obstacles,
     pairs_in_range,
     weights_kernel,
@@ -39,6 +39,7 @@ from tether.continuous.kernels import (  # noqa: E402
 from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
 from tether.continuous.weights import compute_weights  # noqa: E402
 from tether.graph import small  # noqa: E402
+from tether.graph.fiedler import _syevr_lwork  # noqa: E402
 from tether.graph.kernels import laplacian_dense_kernel  # noqa: E402
 from tether.graph.small_kernels import small_fiedler_kernel  # noqa: E402
 from tether.world.clearance import ObstacleIndex, einsum_order  # noqa: E402
@@ -111,13 +112,13 @@ def main() -> None:
     obs = ObstacleIndex.from_world(world)
     graph = compute_weights(q, c, obs)
     lam, nu = graph.fiedler()
-    fused = compute_weights(q, c, obs, guess=nu)
+    fused = compute_weights(q, c, obs, guess=nu, with_force=True)
     lam2, vec = fused.fiedler(guess=nu)
     radii = (c.rs_inner_m, c.rs_m, c.ro_m, c.ro_outer_m, c.rc_m, c.rc_outer_m)
     r = a.repeat
 
     def step() -> None:
-        g = compute_weights(q, c, obs, guess=nu)
+        g = compute_weights(q, c, obs, guess=nu, with_force=True)
         l2, x = g.fiedler(guess=nu)
         f = exact_force(g, l2, x, c)
         semi_implicit_euler(q, v, f + ext, 1e-3, p.mass_kg, p.damping_ns_per_m)
@@ -129,8 +130,10 @@ def main() -> None:
     if obs.tree is None:  # the kernel call alone and its parts (free space)
         st = no_obstacles(3)
         args = (q, *radii, False, *st[:4], 0.0, st[4], einsum_order())
-        rows["  evaluate_small_kernel call"] = per_call(
-            lambda: evaluate_small_kernel(*args, nu, small.SETTINGS), r
+        pot = (c.lambda2_min, c.lambda2_null, c.potential_gain)
+        fused_args = (*args, nu, False, small.SETTINGS, *_syevr_lwork(35), pot, True)
+        rows["  evaluate_fiedler_kernel call (+ eigenpair, force)"] = per_call(
+            lambda: evaluate_fiedler_kernel(*fused_args), r
         )
         rows["  evaluate_kernel call (no eigenpair)"] = per_call(
             lambda: evaluate_kernel(q, *radii, True, False, *st[:4], 0.0, st[4], einsum_order()),

@@ -1,4 +1,4 @@
-"""The weights' pair search (:func:`tether.continuous.kernels.pairs_in_range`), exactly.
+"""The weights' pair search (:func:`tether.continuous.pair_kernels.pairs_in_range`), exactly.
 
 Above ``BRUTE_MAX_N`` robots it has two cube searches: every cube in one array (compact
 teams) and sorted cube codes (spread-out teams). Both must give brute force's pairs,
@@ -14,7 +14,7 @@ import pytest
 
 pytest.importorskip("numba")
 
-from tether.continuous.kernels import BRUTE_MAX_N, pairs_in_range  # noqa: E402
+from tether.continuous.pair_kernels import BRUTE_MAX_N, pairs_in_range  # noqa: E402
 
 
 def brute(q: np.ndarray, r: float) -> np.ndarray:
@@ -58,3 +58,22 @@ def test_pairs_at_the_range_within_rounding(spread: bool) -> None:
         )
         < r
     )
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_small_teams_brute_force_at_the_range_within_rounding(seed: int) -> None:
+    """Below ``BRUTE_MAX_N`` robots: a lattice of spacing ``r`` moved by a few ulps (the
+    root-free test must decide pairs at ``r`` as the root does), random teams, and a
+    robot at NaN (never a pair)."""
+    r = 6.0
+    rng = np.random.default_rng(seed)
+    cells = np.argwhere(np.ones((5, 4, 3), dtype=bool)).astype(float)
+    assert len(cells) <= BRUTE_MAX_N
+    scale = r * (1.0 + rng.choice([-3e-16, -1e-15, 0.0, 1e-15, 3e-16], size=(len(cells), 1)))
+    for q in (cells * scale, cells * r, rng.uniform(0.0, 15.0, (BRUTE_MAX_N, 3))):
+        got = pairs_in_range(np.ascontiguousarray(q), r)
+        assert np.array_equal(got, brute(q, r))
+    q = rng.uniform(0.0, 15.0, (40, 3))
+    q[7] = np.nan
+    got = pairs_in_range(q, r)
+    assert np.array_equal(got, brute(q, r)) and not np.any(got == 7)

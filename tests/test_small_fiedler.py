@@ -204,24 +204,26 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
     import importlib
 
     import tether.continuous.kernels as kernels
+    import tether.continuous.weights as weights
     from tether.config import load_scenario
     from tether.runner import build
     from tether.sim import simulate
 
     fiedler_module = importlib.import_module("tether.graph.fiedler")  # not the function
     calls = {"small": 0}
-    original_small, original_fused = fiedler_module._small, kernels.evaluate_small_kernel
+    original_small, original_fused = fiedler_module._small, kernels.evaluate_fiedler_kernel
 
     def counting_small(*args):  # noqa: ANN002, ANN202
         calls["small"] += 1
         return original_small(*args)
 
     def counting_fused(*args):  # noqa: ANN002, ANN202
-        calls["small"] += 1
+        calls["small"] += not args[16]  # lapack=False: the small solver first
         return original_fused(*args)
 
     monkeypatch.setattr(fiedler_module, "_small", counting_small)
-    monkeypatch.setattr(kernels, "evaluate_small_kernel", counting_fused)
+    monkeypatch.setattr(weights, "_LOADED", [(kernels.evaluate_kernel, counting_fused,
+                                               kernels.no_obstacles)])  # fmt: skip
     sc = load_scenario("multi_target_empty")
     sc.team.n_robots = 20
     sc.strategy.params["fiedler_method"] = method

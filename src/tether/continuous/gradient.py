@@ -131,8 +131,13 @@ def exact_force(
     """``connectivity_force(graph, lambda2, messages(graph, nu), params)``, ``(n, dim)``.
 
     The force of the exact eigenpair (every robot's messages from the same ``nu``); with
-    the kernels one compiled call, the same bits as the chain.
+    the kernels one compiled call, the same bits as the chain; none when the weights'
+    kernel call made it already (:func:`tether.continuous.weights.compute_weights` with
+    ``with_force``: the same kernel on the same arrays).
     """
+    done = graph.cached_force(lambda2, nu, params)
+    if done is not None:
+        return done
     if jit.enabled() and graph.dP_di.ndim == 2:
         from tether.continuous.force_kernels import exact_force_kernel
 

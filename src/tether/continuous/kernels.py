@@ -1,7 +1,19 @@
 """Compiled kernels of App. A: pairs, clearance, weights, Laplacian (numba, lazy).
 
 (Closest points on paths: :mod:`tether.continuous.tracking_kernels`; forces and motion of
-a sub-step: :mod:`tether.continuous.force_kernels`.)
+a sub-step: :mod:`tether.continuous.force_kernels`; the pair search:
+:mod:`tether.continuous.pair_kernels`.)
+
+:func:`evaluate_fiedler_kernel` is one sub-step's evaluation in one call: the weights,
+the eigenpair as :func:`tether.graph.fiedler.fiedler` finds it for ``17 <= n <= 400``
+robots from the previous Fiedler vector (``method="auto"``: the certified small solver,
+``dsyevr`` when it cannot certify; ``"lapack"``: ``dsyevr``, through
+:mod:`tether.graph.lapack_kernels`, the same call as scipy's wrapper) and optionally
+the exact force of eq. (17): the same routines in the same order as the Python chain
+``compute_weights`` / ``WeightedGraph.fiedler`` / ``gradient.exact_force``, so the
+same bits (``tests/test_step_kernels.py``, ``tests/test_fused_substep.py``). A lambda2
+at rounding level (``fiedler``'s component check) or a failed ``dsyevr`` is left to
+Python (``decided = False``).
 
 The fast paths of :func:`tether.continuous.weights.compute_weights`, used when
 :func:`tether.jit.enabled`. Each loop does the arithmetic of its numpy reference in the
@@ -21,22 +33,15 @@ import numpy as np
 from numba import njit
 
 from tether import jit
+from tether.continuous.force_kernels import exact_force_kernel
+from tether.continuous.pair_kernels import pairs_below, pairs_in_range, row_norm
 from tether.graph import small
+from tether.graph.fiedler import _TINY_REL
 from tether.graph.kernels import laplacian_dense_kernel
+from tether.graph.lapack_kernels import syevr_second_kernel
+from tether.graph.small import OK
 from tether.graph.small_kernels import small_fiedler_kernel
 from tether.world.clearance_kernels import segments_nearest_cached
-
-#: below this many robots the pairs are found by testing all of them
-BRUTE_MAX_N = 128
-
-
-@njit(cache=True, inline="always")
-def _norm(x):  # noqa: ANN001, ANN202
-    """``numpy.linalg.norm`` of a short row: ``sqrt`` of the squares summed in order."""
-    acc = 0.0
-    for d in range(x.shape[0]):
-        acc += x[d] * x[d]
-    return math.sqrt(acc)
 
 
 @njit(cache=True, inline="always")
@@ -65,174 +70,6 @@ def log_derivative1(x, lo, hi):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def pairs_in_range(q, r):  # noqa: ANN001, ANN201
-    """All pairs ``(i, j)``, ``i < j``, with ``||q_i - q_j|| < r``, in lexicographic order.
-
-    All pairs are tested below ``BRUTE_MAX_N`` robots; above, robots are bucketed in
-    cubes of side ``r`` and each robot's partners sorted: the cubes in one array
-    (:func:`_pairs_dense_cells`, ``O(n + m)``) when there are at most ``4 n + 1024``
-    of them, else sorted cube codes with a binary search for the neighbouring cubes,
-    ``O(n log n + m)``. The cell list of Allen and Tildesley, *Computer Simulation of
-    Liquids*, Sec. 5.3.2.
-    """
-    n, dim = q.shape
-    cap = 16 * n + 16
-    out = np.empty((cap, 2), np.int64)
-    m = 0
-    diff = np.empty(dim)
-    if n <= BRUTE_MAX_N:
-        for i in range(n):
-            for j in range(i + 1, n):
-                for d in range(dim):
-                    diff[d] = q[i, d] - q[j, d]
-                if _norm(diff) < r:
-                    if m == len(out):
-                        out = _grow(out)
-                    out[m, 0], out[m, 1] = i, j
-                    m += 1
-        return out[:m].copy()
-    lo = np.empty(dim)
-    for d in range(dim):
-        lo[d] = q[:, d].min()
-    cell = np.empty((n, dim), np.int64)
-    size = np.ones(dim, np.int64)
-    for k in range(n):
-        for d in range(dim):
-            cell[k, d] = int((q[k, d] - lo[d]) / r)
-            size[d] = max(size[d], cell[k, d] + 3)
-    code = np.zeros(n, np.int64)
-    for k in range(n):
-        c = 0
-        for d in range(dim):
-            c = c * size[d] + cell[k, d] + 1
-        code[k] = c
-    n_cells = 1
-    for d in range(dim):
-        n_cells *= size[d]
-        if n_cells > 4 * n + 1024:
-            break
-    if n_cells <= 4 * n + 1024:
-        return _pairs_dense_cells(q, r, code, size, n_cells, out)
-    order = np.argsort(code, kind="mergesort")
-    sorted_code = code[order]
-    partners = np.empty(n, np.int64)
-    offs = np.empty(dim, np.int64)
-    for i in range(n):
-        cnt = 0
-        for nb in range(3**dim):
-            rest = nb
-            c = 0
-            for d in range(dim):
-                offs[d] = rest % 3 - 1
-                rest //= 3
-            for d in range(dim):
-                c = c * size[d] + cell[i, d] + 1 + offs[d]
-            first = np.searchsorted(sorted_code, c)
-            while first < n and sorted_code[first] == c:
-                j = order[first]
-                first += 1
-                if j <= i:
-                    continue
-                for d in range(dim):
-                    diff[d] = q[i, d] - q[j, d]
-                if _norm(diff) < r:
-                    partners[cnt] = j
-                    cnt += 1
-        partners[:cnt].sort()
-        out, m = _append(out, m, i, partners, cnt)
-    return out[:m].copy()
-
-
-@njit(cache=True)
-def _pairs_dense_cells(q, r, code, size, n_cells, out):  # noqa: ANN001, ANN202, PLR0913
-    """:func:`pairs_in_range`'s cube search with every cube in one array (counting sort).
-
-    The cube codes carry a margin of one cube on each side, so the ``3^dim``
-    neighbours of a robot's cube are its code plus fixed offsets, and a cube's robots
-    are one slice; the same cubes, distance test and order as the binary search.
-    """
-    n, dim = q.shape
-    start = np.zeros(n_cells + 1, np.int64)
-    for k in range(n):
-        start[code[k] + 1] += 1
-    for c in range(n_cells):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    order = np.empty(n, np.int64)
-    for k in range(n):
-        order[fill[code[k]]] = k
-        fill[code[k]] += 1
-    n_nb = 3**dim
-    shift = np.zeros(n_nb, np.int64)
-    for nb in range(n_nb):
-        rest = nb
-        c = 0
-        for d in range(dim):
-            c = c * size[d] + rest % 3 - 1
-            rest //= 3
-        shift[nb] = c
-    partners = np.empty(n, np.int64)
-    # sqrt(s) < r, decided without the square root away from r * r (both roundings are
-    # within a relative 2^-52 of the exact values): the same pairs as _norm(diff) < r
-    surely_in = r * r * (1.0 - 1e-14)
-    surely_out = r * r * (1.0 + 1e-14)
-    m = 0
-    for i in range(n):
-        cnt = 0
-        for nb in range(n_nb):
-            c = code[i] + shift[nb]
-            for e in range(start[c], start[c + 1]):
-                j = order[e]
-                if j <= i:
-                    continue
-                acc = 0.0
-                for d in range(dim):
-                    x = q[i, d] - q[j, d]
-                    acc += x * x
-                if acc > surely_out or (acc >= surely_in and not math.sqrt(acc) < r):
-                    continue
-                f = cnt  # insertion sort: a robot has few partners
-                while f > 0 and partners[f - 1] > j:
-                    partners[f] = partners[f - 1]
-                    f -= 1
-                partners[f] = j
-                cnt += 1
-        out, m = _append(out, m, i, partners, cnt)
-    return out[:m].copy()
-
-
-@njit(cache=True)
-def _grow(out):  # noqa: ANN001, ANN202
-    bigger = np.empty((2 * len(out), 2), np.int64)
-    bigger[: len(out)] = out
-    return bigger
-
-
-@njit(cache=True)
-def _append(out, m, i, partners, cnt):  # noqa: ANN001, ANN202
-    """Rows ``(i, partners[k])`` for ``k < cnt`` after row ``m`` of ``out`` (grown as needed)."""
-    while m + cnt > len(out):
-        out = _grow(out)
-    for k in range(cnt):
-        out[m, 0], out[m, 1] = i, partners[k]
-        m += 1
-    return out, m
-
-
-@njit(cache=True)
-def pairs_below(q, pairs, r):  # noqa: ANN001, ANN201
-    """The given pairs with ``||q_i - q_j|| < r`` (order kept)."""
-    dim = q.shape[1]
-    keep = np.zeros(len(pairs), np.bool_)
-    diff = np.empty(dim)
-    for k in range(len(pairs)):
-        for d in range(dim):
-            diff[d] = q[pairs[k, 0], d] - q[pairs[k, 1], d]
-        keep[k] = _norm(diff) < r
-    return pairs[keep].copy()
-
-
-@njit(cache=True)
 def weights_kernel(  # noqa: ANN201, PLR0913
     q, pairs, has_obstacles, clearance, s_star, o_star, rs_inner, rs, ro, ro_outer, rc, rc_outer
 ):  # noqa: ANN001
@@ -255,7 +92,7 @@ def weights_kernel(  # noqa: ANN201, PLR0913
         i, j = pairs[k, 0], pairs[k, 1]
         for c in range(dim):
             diff[c] = q[i, c] - q[j, c]
-        dk = _norm(diff)
+        dk = row_norm(diff)
         d_[k] = dk
         den = max(dk, 1e-300)
         for c in range(dim):
@@ -394,20 +231,72 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
 
 
 @njit(cache=True)
-def evaluate_small_kernel(  # noqa: ANN201, PLR0913
+def _maybe_tiny(lam, lap, m):  # noqa: ANN001, ANN202
+    """:func:`tether.graph.fiedler._maybe_tiny` with the dense Laplacian."""
+    if m == 0:
+        return True
+    dmax = lap[0, 0]
+    for r in range(1, lap.shape[0]):
+        dmax = max(dmax, lap[r, r])
+    return lam <= _TINY_REL * dmax * (1.0 + 1e-6)
+
+
+@njit(cache=True)
+def fiedler_kernel(lap, m, guess, lapack, small, lwork, liwork):  # noqa: ANN001, ANN201, PLR0913
+    """:func:`tether.graph.fiedler.fiedler` of a dense Laplacian with ``m`` links from
+    ``guess`` (``17 <= n <= 400``): ``(decided, lambda2, vector, status)``.
+
+    ``lapack``: ``dsyevr`` (``method="lapack"``), else the small solver with the settings
+    ``small`` first (``"auto"``; ``status`` is its status, -1 if it did not run).
+    ``decided = False``: the caller must run ``fiedler`` (lambda2 may be at rounding
+    level, or ``dsyevr`` failed).
+    """
+    status = -1
+    lam = 0.0
+    vec = guess
+    solved = False
+    if not lapack:
+        status, lam, vec, _, _ = small_fiedler_kernel(lap, guess, *small)
+        solved = status == OK
+    if not solved:
+        val, vec, found, info = syevr_second_kernel(lap, lwork, liwork)
+        if info != 0 or found != 1:
+            return False, 0.0, guess.copy(), status
+        lam = max(val, 0.0)
+    if _maybe_tiny(lam, lap, m):
+        return False, 0.0, guess.copy(), status
+    if np.dot(vec, guess) < 0:
+        vec = -vec
+    return True, lam, vec, status
+
+
+@njit(cache=True)
+def evaluate_fiedler_kernel(  # noqa: ANN201, PLR0913
     q, rs_inner, rs, ro, ro_outer, rc, rc_outer, obstacles, points, tree, table, used, slack,
-    field, order, guess, small,
+    field, order, guess, lapack, small, lwork, liwork, potential, with_force,
 ):  # noqa: ANN001  # fmt: skip
-    """:func:`evaluate_kernel` with the Laplacian, then :func:`~tether.graph.small_kernels.
-    small_fiedler_kernel` on it from ``guess`` with the settings ``small``: a sub-step's
-    weights and eigenpair in one call, the same bits as two. Returns the former's tuple
-    and the latter's ``(status, lambda2, vector)`` (-1: the clearance table must grow)."""
+    """:func:`~tether.continuous.kernels.evaluate_kernel` (with the Laplacian), then
+    :func:`fiedler_kernel` on it from ``guess``, then with ``with_force`` the force of
+    the eigenpair (``potential = (lambda2_min, lambda2_null, gain)``).
+
+    Returns ``evaluate_kernel``'s tuple, ``(decided, lambda2, vector, status)`` and the
+    force (``(0, dim)`` when not made); ``decided = False`` and nothing after the
+    weights when the clearance table must grow (``out[-1] < 0``).
+    """
+    n, dim = q.shape
     out = evaluate_kernel(q, rs_inner, rs, ro, ro_outer, rc, rc_outer, True, obstacles, points,
                           tree, table, used, slack, field, order)  # fmt: skip
+    none = np.zeros((0, dim))
     if out[-1] < 0:
-        return out, -1, 0.0, guess.copy()
-    status, lam, vec, _, _ = small_fiedler_kernel(out[10], guess, *small)
-    return out, status, lam, vec
+        return out, (False, 0.0, guess.copy(), -1), none
+    pf, dP_di, dP_dj, _, coll, coll_pairs, coll_unit, coll_logd, pairs, _, lap, _ = out
+    eigen = fiedler_kernel(lap, len(pairs), guess, lapack, small, lwork, liwork)
+    if not (with_force and eigen[0]):
+        return out, eigen, none
+    force = exact_force_kernel(n, pairs, pf, coll, dP_di, dP_dj, coll_pairs, coll_unit,
+                               coll_logd, eigen[2], eigen[1], potential[0], potential[1],
+                               potential[2])  # fmt: skip
+    return out, eigen, force
 
 
 def warm_up() -> float:
@@ -458,8 +347,16 @@ def warm_up() -> float:
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
-        evaluate_small_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, obs is not None, points_, tree,
-                              table, used, 0.25, fld, 1, nu, small.SETTINGS)  # fmt: skip
+    from tether.graph.lapack_kernels import warm_up as lapack_warm_up
+
+    lapack_warm_up()
+    for obs in (None, index):
+        points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
+            obs.kernel_state(3)  # fmt: skip
+        for lapack in (False, True):
+            evaluate_fiedler_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, obs is not None, points_,
+                                    tree, table, used, 0.25, fld, 1, nu, lapack, small.SETTINGS,
+                                    78, 30, (0.0, 0.5, 1.0), True)  # fmt: skip
     # every other kernel module's warm-up (imports here: numba only once asked for)
     from tether.comm_kernels import warm_up as comm
     from tether.continuous.round_kernels import warm_up as rounds

@@ -153,6 +153,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     name = "multi_target"
     Params = MultiTargetParams
+    force_with_weights = False  # the fused sub-step (continuous/substep.py) makes the force
 
     def __init__(self, params: MultiTargetParams, book: TargetBook) -> None:
         super().__init__(params)

@@ -232,6 +232,9 @@ class ConnectivityStrategy(Strategy):
 
     name = "connectivity"
     Params = ConnectivityStrategyParams
+    #: the exact force is made in the weights' kernel call (a subclass that makes its
+    #: force otherwise, multi_target's fused sub-step, turns it off)
+    force_with_weights = True
 
     def __init__(self, params: ConnectivityStrategyParams | None = None) -> None:
         super().__init__()
@@ -302,9 +305,11 @@ class ConnectivityStrategy(Strategy):
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
         exact = self.params.eigensolver == "exact" or self.params.safeguard
         method = self.params.fiedler_method
-        # with the guess, the kernels solve the eigenpair in the weights' call (same bits)
-        fused = exact and method == "auto"
-        graph = compute_weights(q, self.conn, self.obstacles, guess=self._nu if fused else None)
+        # with the guess, the kernels solve the eigenpair (and the exact force) in the
+        # weights' call: the same bits as the calls below
+        with_force = self.force_with_weights and self.estimator is None
+        graph = compute_weights(q, self.conn, self.obstacles, guess=self._nu if exact else None,
+                                method=method, with_force=with_force)  # fmt: skip
         if exact:
             lam, nu = graph.fiedler(guess=self._nu, state=self._warm, method=method)
         else:

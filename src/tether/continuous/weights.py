@@ -34,9 +34,9 @@ from tether import jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import smooth_step, smooth_step_log_derivative
 from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
-from tether.graph.fiedler import Method
+from tether.graph.fiedler import Method, _syevr_lwork
 from tether.graph.warm import WarmState
-from tether.world.clearance import ObstacleIndex
+from tether.world.clearance import ObstacleIndex, einsum_order
 
 
 @dataclass
@@ -65,8 +65,10 @@ class WeightedGraph:
     # the kernels' W and dense Laplacian, when they computed them (same bits)
     _weights: np.ndarray | None = field(default=None, repr=False, compare=False)
     _laplacian: np.ndarray | None = field(default=None, repr=False, compare=False)
-    # (guess, (status, lambda2, vector)) of the small Fiedler solver, run by the same kernel
-    _small: tuple | None = field(default=None, repr=False, compare=False)
+    # (guess, method, lambda2, vector, potential, force) found by the same kernel call: the
+    # result of fiedler(guess=guess, method=method) and of exact_force for ``potential``
+    # ((lambda2_min, lambda2_null, gain); force None if not made)
+    _eigen: tuple | None = field(default=None, repr=False, compare=False)
 
     @property
     def weights(self) -> np.ndarray:
@@ -76,6 +78,18 @@ class WeightedGraph:
         return (
             self.pair_factor * self.collision[self.pairs[:, 0]] * self.collision[self.pairs[:, 1]]
         )
+
+    def cached_force(
+        self, lambda2: float, nu: np.ndarray, params: ConnectivityParams
+    ) -> np.ndarray | None:
+        """The force of eq. (17) for exactly this eigenpair and ``params``'s potential, if
+        the weights' kernel call made it (:func:`compute_weights` with ``with_force``)."""
+        eigen = self._eigen
+        if eigen is None or eigen[5] is None or nu is not eigen[3] or lambda2 != eigen[2]:
+            return None
+        if eigen[4] != (params.lambda2_min, params.lambda2_null, params.potential_gain):
+            return None
+        return eigen[5]
 
     def active(self) -> tuple[np.ndarray, np.ndarray]:
         """Pairs with ``W_ij > 0`` and their weights (the graph ``G_lambda``)."""
@@ -101,15 +115,17 @@ class WeightedGraph:
         warm solver's factorization between steps; ``method`` as ``fiedler``'s
         (``"lapack"``: LAPACK only up to 400 robots, the choice before the small solver).
         """
+        eigen = self._eigen
+        if eigen is not None and guess is eigen[0] and method == eigen[1]:
+            return eigen[2], eigen[3]
         w = self.weights
         lap = self._laplacian
         if lap is None and jit.enabled() and self.n <= SUBSET_MAX_N:  # compiled, same matrix
             from tether.graph.kernels import laplacian_dense_kernel
 
             lap = laplacian_dense_kernel(self.n, self.pairs, w)
-        done = self._small[1] if self._small is not None and guess is self._small[0] else None
         return fiedler(self.n, self.pairs, w, guess=guess, laplacian=lap, state=state,
-                       method=method, small_result=done)  # fmt: skip
+                       method=method)  # fmt: skip
 
 
 def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.ndarray:
@@ -133,6 +149,8 @@ def compute_weights(
     obstacles: ObstacleIndex | None = None,
     pairs: np.ndarray | None = None,
     guess: np.ndarray | None = None,
+    method: Method = "auto",
+    with_force: bool = False,
 ) -> WeightedGraph:
     """The weighted graph ``G_lambda`` of the team (App. A, steps 1-2).
 
@@ -150,8 +168,15 @@ def compute_weights(
     guess
         The Fiedler vector the caller will pass to :meth:`WeightedGraph.fiedler`: with
         the kernels, a team of ``DENSE_MAX_N < n <= SUBSET_MAX_N`` robots gets its
-        eigenpair (:mod:`tether.graph.small`) in the same compiled call as its weights;
-        ``fiedler(guess=guess)`` then returns it (the same bits as computing it there).
+        eigenpair in the same compiled call as its weights
+        (:func:`tether.continuous.kernels.evaluate_fiedler_kernel`);
+        ``fiedler(guess=guess, method=method)`` then returns it (the same bits as
+        computing it there).
+    method
+        The ``fiedler`` method that eigenpair is for: ``"auto"`` or ``"lapack"``.
+    with_force
+        With that eigenpair, the force of eq. (17) too (in the same call):
+        :func:`tether.continuous.gradient.exact_force` then returns it (same bits).
 
     With :func:`tether.jit.enabled`, the kernels of :mod:`tether.continuous.kernels`
     compute the same arrays (to the last bit) without numpy's per-call overhead.
@@ -162,7 +187,9 @@ def compute_weights(
         # branch gives the same numbers (up to the sign of zeros), at twice the cost
         obstacles = None
     if jit.enabled():
-        return _compute_weights_kernel(q, params, obstacles, pairs, guess)
+        if pairs is None:
+            return _evaluate_kernel(q, params, obstacles, guess, method, with_force)
+        return _compute_weights_kernel(q, params, obstacles, pairs)
     return _compute_weights_reference(q, params, obstacles, pairs)
 
 
@@ -170,18 +197,15 @@ def _compute_weights_kernel(
     q: np.ndarray,
     params: ConnectivityParams,
     obstacles: ObstacleIndex | None,
-    pairs: np.ndarray | None,
-    guess: np.ndarray | None = None,
+    pairs: np.ndarray,
 ) -> WeightedGraph:
-    """:func:`compute_weights` by the kernels of :mod:`tether.continuous.kernels` (same bits)."""
+    """:func:`compute_weights` of given pairs by the kernels of
+    :mod:`tether.continuous.kernels` (same bits)."""
     from tether.continuous import kernels as k
 
     q = np.ascontiguousarray(q)
     n = len(q)
-    if pairs is None:
-        return _evaluate_kernel(q, params, obstacles, guess)
-    else:
-        pairs = k.pairs_below(q, np.asarray(pairs, dtype=np.int64).reshape(-1, 2), params.rs_m)
+    pairs = k.pairs_below(q, np.asarray(pairs, dtype=np.int64).reshape(-1, 2), params.rs_m)
     has_obstacles = obstacles is not None and len(pairs) > 0
     if has_obstacles:
         i, j = pairs[:, 0], pairs[:, 1]
@@ -201,36 +225,59 @@ def _compute_weights_kernel(
 _NO_CLEARANCE = (np.zeros(0), np.zeros(0), np.zeros((0, 3)))
 
 
+_LOADED: list = []
+
+
+def _kernels() -> tuple:
+    """``evaluate_kernel``, ``evaluate_fiedler_kernel`` and ``no_obstacles``, imported
+    on first use (numba only when kernels run; an import statement in the hot function
+    costs microseconds per call)."""
+    if not _LOADED:
+        from tether.continuous.kernels import (
+            evaluate_fiedler_kernel,
+            evaluate_kernel,
+            no_obstacles,
+        )
+
+        _LOADED.append((evaluate_kernel, evaluate_fiedler_kernel, no_obstacles))
+    return _LOADED[0]
+
+
 def _evaluate_kernel(
     q: np.ndarray,
     params: ConnectivityParams,
     obstacles: ObstacleIndex | None,
     guess: np.ndarray | None = None,
+    method: Method = "auto",
+    with_force: bool = False,
 ) -> WeightedGraph:
-    """Pairs, clearance, weights, ``W``, the dense Laplacian (and with ``guess`` the small
-    solver's eigenpair) in one kernel call."""
-    from tether.continuous.kernels import evaluate_kernel, evaluate_small_kernel, no_obstacles
-    from tether.world.clearance import einsum_order
-
+    """Pairs, clearance, weights, ``W``, the dense Laplacian (and with ``guess`` the
+    eigenpair, with ``with_force`` the force) in one kernel call."""
+    evaluate_kernel, evaluate_fiedler_kernel, no_obstacles = _kernels()
+    q = np.ascontiguousarray(q)
     n, dim = q.shape
     has = obstacles is not None and obstacles.tree is not None and n > 1
     estimate = min(n * (n - 1) // 2, 32 * n)
     slack = obstacles.cache_slack_m if has else 0.0
     radii = (params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
              params.rc_outer_m)  # fmt: skip
-    fused = guess is not None and DENSE_MAX_N < n <= SUBSET_MAX_N and len(guess) == n
+    fused = (guess is not None and DENSE_MAX_N < n <= SUBSET_MAX_N and len(guess) == n
+             and method in ("auto", "lapack"))  # fmt: skip
     if fused:
-        guess = np.ascontiguousarray(guess, dtype=float)
+        guess_c = np.ascontiguousarray(guess, dtype=float)
+        potential = (params.lambda2_min, params.lambda2_null, params.potential_gain)
+        lwork, liwork = _syevr_lwork(n)
     eigen = None
     for _ in range(2):
         points, tree, table, used, fld = obstacles.kernel_state(estimate) if has else \
             no_obstacles(dim)  # fmt: skip
         if fused:
-            out, status, lam, vec = evaluate_small_kernel(
-                q, *radii, has, points, tree, table, used, slack, fld, einsum_order(), guess,
-                small.SETTINGS,
+            out, (decided, lam, vec, _), force = evaluate_fiedler_kernel(
+                q, *radii, has, points, tree, table, used, slack, fld, einsum_order(), guess_c,
+                method == "lapack", small.SETTINGS, lwork, liwork, potential, with_force,
             )  # fmt: skip
-            eigen = (guess, (status, lam, vec))
+            if decided:
+                eigen = (guess, method, lam, vec, potential, force if with_force else None)
         else:
             out = evaluate_kernel(q, *radii, n <= SUBSET_MAX_N, has, points, tree, table, used,
                                   slack, fld, einsum_order())  # fmt: skip
