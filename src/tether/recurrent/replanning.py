@@ -379,7 +379,7 @@ class RecurrentStrategy:
         src = graph.coarse.node_at(points)
         if (src < 0).any():
             raise RuntimeError("a robot stands outside the known traversable space")
-        geo = graph.coarse.geodesics(src)
+        geo = graph.coarse.geodesics(src, lazy=True)
         return geo.dist[:, graph.nodes], geo
 
     def _deploy(
