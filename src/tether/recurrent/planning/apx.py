@@ -53,6 +53,7 @@ CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
 FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles
 FIRST_BAND = 1 / 64  # width of the first utility band, relative to the best subset
 LOWEST_BAND_RATIO = 0.75  # a band (lo, hi] has lo >= this * hi (unless it is the last)
+BAND_SUBSETS = 20_000  # a band after a larger one is narrower in proportion
 
 
 @dataclass
@@ -367,15 +368,23 @@ def _subsets_in_band(uf: np.ndarray, s: int, lo: float, hi: float) -> np.ndarray
 def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.ndarray, ...]]:
     """genNewSubset: subsets of <= ``delta`` positions, band by band of utility.
 
-    Yields ``(util, size, combos)`` (``combos`` padded with -1 to ``delta``
-    columns) ordered by decreasing utility, increasing size, then colex rank,
-    i.e. exactly the order of a global sort; bands are disjoint utility
-    intervals ``(lo, hi]`` of doubling width, ``lo >= LOWEST_BAND_RATIO * hi``,
-    so a consumer that stops early (Step 10) never makes the later bands.
+    Yields ``(util, size, combos, lo)`` (``combos`` padded with -1 to ``delta``
+    columns; ``lo`` the band's lower end: every later subset has ``U <= lo``)
+    ordered by decreasing utility, increasing size, then colex rank, i.e. exactly
+    the order of a global sort; bands are disjoint utility intervals ``(lo, hi]``,
+    the first :data:`FIRST_BAND` times the ``delta``-th utility wide, then of
+    doubling width with ``lo >= LOWEST_BAND_RATIO * hi``, narrower when the growth
+    of the last bands predicts more than :data:`BAND_SUBSETS` subsets; a consumer
+    that stops early (Step 10) never makes the later bands.
     """
     top = float(uf[:delta].sum())
     floor = float(uf.min())  # no subset has a smaller utility (utilities are > 0)
-    hi, lo = np.inf, top - top * FIRST_BAND
+    # the first band's width scales with the delta-th utility, not the best subset's: one
+    # frontier far more useful than the rest (a robot next to it) would put every subset
+    # holding it into one band (C(109, 3) = 209 k subsets where the search stopped after
+    # 16 k, issue 14)
+    width = float(uf[min(delta, len(uf)) - 1]) * FIRST_BAND
+    hi, lo, last = np.inf, top - width, 0
     while True:
         if lo < max(floor, 1e-9 * top):
             lo = -1.0  # the last band: every subset left
@@ -390,14 +399,22 @@ def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.nda
             rank.append(ranker.rank(p))
         util_a, size_a = np.concatenate(util), np.concatenate(size)
         order = np.lexsort((np.concatenate(rank), size_a, -util_a))
-        yield util_a[order], size_a[order], combos[order]
+        yield util_a[order], size_a[order], combos[order], lo
         if lo < 0:
             return
         # widths double (as Algorithm 1's bands), but a band never reaches below
         # LOWEST_BAND_RATIO of its upper end: the number of subsets grows steeply as the
         # utility falls, and Step 10 usually stops inside the band (issue 14: one band of
         # 1.9 M subsets cost 2 s where the search stopped in its first thousands)
-        hi, lo = lo, max(2.0 * lo - top, LOWEST_BAND_RATIO * lo)
+        # ... and narrower in proportion when, at the growth from the last band to this
+        # one, it would hold more than BAND_SUBSETS subsets (they crowd at lower
+        # utilities: a wide last band was mostly made after the subset that stopped the
+        # search)
+        width = min(2.0 * width, (1.0 - LOWEST_BAND_RATIO) * lo)
+        guess = len(util_a) * max(1.0, len(util_a) / max(1, last))  # next band, same growth
+        if guess > BAND_SUBSETS:
+            width = min(width, (hi - lo if hi < np.inf else width) * BAND_SUBSETS / guess)
+        hi, lo, last = lo, lo - width, len(util_a)
 
 
 def solve_apx(problem: Problem, delta: int) -> ApxResult:
@@ -417,8 +434,9 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     uf = problem.utility[fr]
     dist_f = np.where(problem.dist > budget, np.inf, problem.dist).astype(float)
     z_best, tree_best, u_best = 0.0, {0}, 0.0
-    for util, size, combos in _bands(uf, dp.delta, dp.ranker):
-        pos, block = 0, FIRST_BLOCK
+    block = FIRST_BLOCK  # grows across bands: narrow bands do not restart at small blocks
+    for util, size, combos, lower in _bands(uf, dp.delta, dp.ranker):
+        pos = 0
         while pos < len(util) and util[pos] > z_best:
             end = pos + int(np.searchsorted(-util[pos : pos + block], -z_best, side="left"))
             block *= 2
@@ -439,7 +457,7 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
                 if z > z_best:
                     z_best, tree_best, u_best = z, verts, float(util[i])
             pos = end
-        if pos < len(util):  # Step 10 holds for every later subset
+        if pos < len(util) or lower <= z_best:  # Step 10 holds for every later subset
             break
     verts = complete_configuration(problem, tree_best)
     utility = float(problem.utility[list(verts)].sum())
