@@ -444,11 +444,11 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
             for s in np.unique(size[pos:end]):
                 rows = np.flatnonzero(size[pos:end] == s)
                 cost[rows] = dp.steiner_costs(combos[pos + rows, :s])
-            for i in range(pos, end):
+            # the feasible subsets only: Steps 6, 12 and the closed list skip the others
+            # (util is non-increasing, so Step 10 stops at the same place)
+            for i in (np.flatnonzero(cost <= budget) + pos).tolist():
                 if util[i] <= z_best:  # Step 10
                     break
-                if cost[i - pos] > budget:  # Steps 6, 12 and the closed list
-                    continue
                 terminals = [int(v) for v in fr[combos[i, : size[i]]]]  # Step 11
                 tree_cost, edges = dreyfus_wagner(dist_f, problem.pred, [*terminals, 0])
                 assert tree_cost == cost[i - pos], "shared DP and Dreyfus-Wagner disagree"
