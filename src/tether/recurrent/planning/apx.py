@@ -46,8 +46,9 @@ from math import comb
 import numpy as np
 
 from tether import jit
+from tether.recurrent.planning.complete import complete_configuration
 from tether.recurrent.planning.problem import Problem
-from tether.recurrent.planning.steiner import _path_edges, dreyfus_wagner
+from tether.recurrent.planning.steiner import dreyfus_wagner
 
 CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
 FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles
@@ -69,15 +70,24 @@ class ApxResult:
     subsets_evaluated: int
 
 
-def _relax(g: np.ndarray, dist: np.ndarray, cap: int) -> np.ndarray:
+def _relax(
+    g: np.ndarray,
+    dist: np.ndarray,
+    cap: int,
+    graph: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
     """Dreyfus-Wagner relaxation ``P[s, v] = min_u g[s, u] + d(u, v)``, chunked.
 
     With the kernels on, the same integers from a compiled loop
-    (:mod:`tether.recurrent.planning.apx_kernels`).
+    (:mod:`tether.recurrent.planning.apx_kernels`); given ``graph`` (CSR ``indptr,
+    indices`` of the unit-cost graph whose hop counts clipped at ``cap`` are ``dist``)
+    from breadth-first searches on it.
     """
     if jit.enabled():
-        from tether.recurrent.planning.apx_kernels import relax_kernel
+        from tether.recurrent.planning.apx_kernels import relax_graph_kernel, relax_kernel
 
+        if graph is not None:
+            return relax_graph_kernel(np.ascontiguousarray(g), *graph, int(cap))
         return relax_kernel(np.ascontiguousarray(g), dist, int(cap))
     out = np.empty_like(g)
     step = max(1, (1 << 21) // max(1, dist.size))
@@ -177,11 +187,26 @@ class LazySteiner:
     the DP rows (``P``, ``g``, ``E``) are computed once, when first needed.
     """
 
-    def __init__(self, dist: np.ndarray, frontiers: np.ndarray, budget: int, delta: int) -> None:
+    def __init__(
+        self,
+        dist: np.ndarray,
+        frontiers: np.ndarray,
+        budget: int,
+        delta: int,
+        unit_graph: bool = False,
+    ) -> None:
         self.budget = budget
         self.cap = cap = budget + 1
         self.dtype = np.int16 if 3 * cap < np.iinfo(np.int16).max else np.int32
         self.d = d = np.minimum(dist, cap).astype(self.dtype)
+        # unit_graph: dist holds hop counts, so d == 1 are the edges (cap >= 2) and the
+        # relaxations may search the graph (apx_kernels.relax_graph_kernel)
+        self.graph = None
+        if unit_graph and cap >= 2:
+            src, dst = np.nonzero(d == 1)
+            indptr = np.zeros(d.shape[0] + 1, dtype=np.int64)
+            np.cumsum(np.bincount(src, minlength=d.shape[0]), out=indptr[1:])
+            self.graph = (indptr, dst.astype(np.int64))
         self.d0 = d[0]
         self.fd = d[frontiers]  # P[{f}][v] = d(f, v)
         self.ff = self.fd[:, frontiers]  # frontier-frontier distances (Step 6)
@@ -277,7 +302,7 @@ class LazySteiner:
         ranks = self.ranker.rank(c)
         uniq, first = store.missing(ranks)
         if len(uniq):
-            store.add(uniq, _relax(self._merge(c[first]), self.d, self.cap))
+            store.add(uniq, _relax(self._merge(c[first]), self.d, self.cap, self.graph))
         return store.get(ranks)
 
     def merged(self, c: np.ndarray) -> np.ndarray:
@@ -293,7 +318,7 @@ class LazySteiner:
         """Rows ``E[a][w] = min_u d(b,u) + d(a,u) + d(u,w)`` for frontier positions ``a``."""
         uniq, first = self.e_rows.missing(a)
         if len(uniq):
-            self.e_rows.add(uniq, _relax(self.fd[uniq] + self.d0, self.d, self.cap))
+            self.e_rows.add(uniq, _relax(self.fd[uniq] + self.d0, self.d, self.cap, self.graph))
         return self.e_rows.get(a)
 
 
@@ -430,7 +455,7 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     # subsets only feeds the DP infeasible work (C(120, 4) = 8.2 M subsets when 3
     # robots are ready), so the subsets stop at min(delta, budget) frontiers; the
     # result is the same.
-    dp = LazySteiner(problem.dist, fr, budget, min(delta, budget))
+    dp = LazySteiner(problem.dist, fr, budget, min(delta, budget), unit_graph=True)
     uf = problem.utility[fr]
     dist_f = np.where(problem.dist > budget, np.inf, problem.dist).astype(float)
     z_best, tree_best, u_best = 0.0, {0}, 0.0
@@ -467,30 +492,3 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     upper = utility if proven else min(best_possible, u_best * kk / delta)
     total = sum(dp.ranker.count(s) for s in range(1, dp.delta + 1))
     return ApxResult(verts, utility, u_best, proven, upper, total, dp.evaluated + k)
-
-
-def complete_configuration(problem: Problem, tree: set[int]) -> set[int]:
-    """Step 20: greedily hang branches to the best still-reachable frontiers.
-
-    While robots remain, connect the unoccupied frontier of highest utility
-    among those within the remaining budget (hops from the current tree) by
-    a shortest path from its nearest tree vertex.
-    """
-    verts = set(tree)
-    remaining = problem.budget - (len(verts) - 1)
-    d = problem.dist
-    while remaining > 0:
-        members = np.fromiter(verts, dtype=np.intp)
-        near = d[members]
-        src = members[np.argmin(near, axis=0)]
-        gap = near.min(axis=0)
-        cand = [
-            int(f) for f in problem.frontiers if f not in verts and gap[f] <= remaining
-        ]  # frontiers are sorted by decreasing utility
-        if not cand:
-            break
-        f = cand[0]
-        for a, b in _path_edges(problem.pred, int(src[f]), f):
-            verts.update((a, b))
-        remaining = problem.budget - (len(verts) - 1)
-    return verts
