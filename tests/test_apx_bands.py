@@ -27,16 +27,28 @@ def global_order(uf: np.ndarray, delta: int) -> list[tuple[int, ...]]:
 
 
 @pytest.mark.parametrize("seed", range(12))
-@pytest.mark.parametrize("ratio", [0.0, 0.5, 0.75, 0.95])
-def test_bands_joined_are_the_global_order(seed: int, ratio: float, monkeypatch) -> None:  # noqa: ANN001
+@pytest.mark.parametrize(
+    ("ratio", "cap"), [(0.0, 20_000), (0.5, 3), (0.75, 20_000), (0.75, 1), (0.95, 7)]
+)
+def test_bands_joined_are_the_global_order(seed: int, ratio: float, cap: int, monkeypatch) -> None:  # noqa: ANN001
+    """Any band widths (ratio; ``BAND_SUBSETS`` small enough to narrow most bands) give the
+    global order, and each band's reported lower end bounds every later subset."""
     rng = np.random.default_rng(seed)
     k, delta = int(rng.integers(4, 13)), int(rng.integers(1, 5))
     uf = np.sort(rng.choice([0.5, 1.0, 2.0, 7.0], size=k) * rng.uniform(0.2, 3.0, size=k))[::-1]
     if seed % 3 == 0:
         uf = np.round(uf) + 1.0  # ties: the order falls back to size, then rank
         uf = np.sort(uf)[::-1]
+    if seed % 4 == 1:
+        uf[0] *= 500.0  # one frontier far above the rest (the first band's width)
     monkeypatch.setattr(apx, "LOWEST_BAND_RATIO", ratio)
-    got = []
-    for _util, size, combos in apx._bands(uf, delta, apx._Ranker(k, delta)):
+    monkeypatch.setattr(apx, "BAND_SUBSETS", cap)
+    got, lows = [], []
+    for util, size, combos, lo in apx._bands(uf, delta, apx._Ranker(k, delta)):
         got.extend(tuple(int(x) for x in row[:s]) for row, s in zip(combos, size, strict=True))
+        assert all(u > lo for u in util)
+        lows.append((len(got), lo))
     assert got == global_order(uf, delta)
+    utils = [float(uf[list(c)].sum()) for c in got]
+    for n_before, lo in lows:
+        assert all(u <= lo for u in utils[n_before:])

@@ -14,13 +14,15 @@ import networkx as nx
 import numpy as np
 import pytest
 
+from tether import jit
 from tether.recurrent.planning import problem as _problem
 from tether.recurrent.planning.apx import LazySteiner
 from tether.recurrent.planning.steiner import steiner_tree
 
 
+@pytest.mark.parametrize("unit_graph", [False, True])
 @pytest.mark.parametrize("seed", range(10))
-def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int) -> None:
+def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int, unit_graph: bool) -> None:
     rng = np.random.default_rng(100 + seed)
     g = nx.connected_watts_strogatz_graph(int(rng.integers(12, 22)), 4, 0.3, seed=seed)
     frontiers = [int(v) for v in rng.choice(np.arange(1, len(g)), size=7, replace=False)]
@@ -28,7 +30,8 @@ def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int) -> None:
     prob = _problem.build(g, 0, dict.fromkeys(frontiers, 1.0), budget)
     fr = prob.frontiers[prob.dist[0, prob.frontiers] <= budget]
     delta = int(rng.integers(2, 5))
-    lazy = LazySteiner(prob.dist, fr, budget, delta)
+    lazy = LazySteiner(prob.dist, fr, budget, delta, unit_graph=unit_graph)
+    assert (lazy.graph is not None) == unit_graph  # budget >= 3: the graph search is used
     sub = nx.Graph()
     sub.add_edges_from(
         (prob.labels[a], prob.labels[b]) for a, b in zip(*prob.adj.nonzero(), strict=True)
@@ -39,9 +42,12 @@ def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int) -> None:
         for s in range(1, min(delta, len(fr)) + 1)
         for c in itertools.combinations(range(len(fr)), s)
     ]
+    if unit_graph:
+        pytest.importorskip("numba")
     for k in rng.permutation(len(asks)):  # a random order: the memo and row stores must agree
         combo = asks[k]
-        got = int(lazy.steiner_costs(combo[None, :])[0])
+        with jit.using(unit_graph):  # the graph search is the compiled path
+            got = int(lazy.steiner_costs(combo[None, :])[0])
         terms = [prob.labels[int(v)] for v in fr[combo]] + [0]
         try:
             exact = steiner_tree(sub, terms).cost
@@ -94,3 +100,33 @@ def test_relax_kernel_matches_numpy(seed: int) -> None:
         assert got.dtype == want.dtype and np.array_equal(got, want)
         brute = np.minimum((g[:, :, None].astype(int) + d[None]).min(axis=1), cap)
         assert np.array_equal(want, brute)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_relax_graph_kernel_matches_numpy(seed: int) -> None:
+    """Breadth-first relaxation on the graph = the min-plus reference on its hop counts.
+
+    Random graphs (some disconnected, so clipped unreachable distances occur), labels
+    above the clip, both dtypes; catches a level loop one short, labels not clipped
+    before the search, or a search that lets a label rise.
+    """
+    pytest.importorskip("numba")
+    from tether.recurrent.planning.apx import _relax
+
+    rng = np.random.default_rng(300 + seed)
+    n = int(rng.integers(2, 70))
+    g_nx = nx.gnp_random_graph(n, float(rng.choice([0.03, 0.08, 0.3])), seed=seed)
+    hops = dict(nx.all_pairs_shortest_path_length(g_nx))
+    cap = int(rng.integers(2, 12))
+    for dtype in (np.int16, np.int32):
+        d = np.full((n, n), cap, dtype=dtype)
+        for u, row in hops.items():
+            for v, h in row.items():
+                d[u, v] = min(h, cap)
+        lazy = LazySteiner(d, np.arange(min(2, n)), cap - 1, 2, unit_graph=True)
+        g = rng.integers(0, 2 * cap + 1, size=(int(rng.integers(1, 30)), n)).astype(dtype)
+        with jit.using(False):
+            want = _relax(g, d, cap)
+        with jit.using(True):
+            got = _relax(g, d, cap, lazy.graph)
+        assert got.dtype == want.dtype and np.array_equal(got, want)

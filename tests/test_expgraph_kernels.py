@@ -80,4 +80,5 @@ def test_key_set_membership() -> None:
         ref |= set(new.tolist())
         probe = rng.integers(-5, 510, size=50)
         assert ks.contains(probe).tolist() == [int(p) in ref for p in probe]
+        assert ks.keys.tolist() == sorted(ref)  # sorted, no duplicates (as np.union1d)
     assert len(ks) == len(ref)

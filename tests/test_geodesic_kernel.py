@@ -126,3 +126,42 @@ def test_components_match_scipy(seed: int, free: np.ndarray, factor: int) -> Non
     c = CoarseGrid(free, factor)
     _, want = connected_components(c.graph, directed=False)
     assert np.array_equal(c.components, want)
+
+
+@pytest.mark.parametrize(("seed", "free", "factor"), _maps())
+def test_lazy_paths_match_scipy(seed: int, free: np.ndarray, factor: int) -> None:
+    """Paths traced from the distances alone (``lazy``) are scipy's, for every target.
+
+    Catches a predecessor rule that differs from the eager kernel's (e.g. the first
+    candidate instead of the smallest label), a lost tie flag (the fallback not taken)
+    or an unreached target traced through.
+    """
+    c = CoarseGrid(free, factor)
+    if c.n_nodes == 0:
+        return
+    rng = np.random.default_rng(seed)
+    src = rng.choice(c.n_nodes, size=min(4, c.n_nodes), replace=False)
+    want_d, want_p = dijkstra(c.graph, directed=False, indices=src, return_predecessors=True)
+    with jit.using(True):
+        lazy = c.geodesics(src, lazy=True)
+        eager = c.geodesics(src)
+    assert lazy.pred is None and np.array_equal(lazy.dist, want_d)
+    for i in range(len(src)):
+        for t in range(c.n_nodes):  # unreached targets too: the path is the target alone
+            assert np.array_equal(lazy.path(i, t), c.path(want_p[i], t))
+            assert np.array_equal(lazy.path(i, t), eager.path(i, t))
+
+
+def test_lazy_path_through_a_tie() -> None:
+    """The mirror-symmetric map: the lazy trace sees the tie and takes scipy's path."""
+    from tether.paths.geodesic_kernels import trace_kernel
+
+    free = np.ones((7, 7), dtype=bool)
+    free[3, 2:4] = False
+    c = CoarseGrid(free, 1)
+    src, target = int(c.node[3, 0]), int(c.node[3, 4])
+    _, want = dijkstra(c.graph, directed=False, indices=[src], return_predecessors=True)
+    with jit.using(True):
+        geo = c.geodesics([src], lazy=True)
+        assert trace_kernel(*c._kernel_grid(), geo.dist[0], target)[1]  # flagged
+        assert np.array_equal(geo.path(0, target), c.path(want[0], target))

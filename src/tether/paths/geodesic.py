@@ -149,14 +149,19 @@ class CoarseGrid:
             return self._kernel(sources, False)[0]
         return self._scipy(sources, predecessors)
 
-    def geodesics(self, sources: np.ndarray) -> Geodesics:
+    def geodesics(self, sources: np.ndarray, lazy: bool = False) -> Geodesics:
         """Distances from each source node and the paths to any node (:class:`Geodesics`).
 
         The paths are those of scipy's predecessors (:meth:`distances`), whichever
-        implementation runs (:mod:`tether.jit`).
+        implementation runs (:mod:`tether.jit`). With ``lazy`` and the kernels on, no
+        predecessor matrix is made: :meth:`Geodesics.path` derives each path asked for
+        from the distances (the same path; a caller that needs a few paths saves the
+        predecessor pass over every node of every source).
         """
         sources = np.atleast_1d(np.asarray(sources, dtype=np.intp))
         if len(sources) and jit.enabled():
+            if lazy:
+                return Geodesics(self, sources, self._kernel(sources, False)[0], None, None)
             dist, pred, tie = self._kernel(sources, True)
         else:
             dist, pred = self.distances(sources, predecessors=True)
@@ -177,12 +182,16 @@ class CoarseGrid:
         """:func:`~tether.paths.geodesic_kernels.grid_dijkstra_kernel` in node ids."""
         from tether.paths.geodesic_kernels import grid_dijkstra_kernel
 
+        return grid_dijkstra_kernel(*self._kernel_grid(), sources, predecessors)
+
+    def _kernel_grid(self) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """The kernels' view of the grid: padded mask, raveled node cells, edge weights."""
         cx, cy = self.shape
         padded = np.zeros((cx + 2, cy + 2), dtype=bool)
         padded[1:-1, 1:-1] = self.traversable
         flat = (self.cells[:, 0] + 1) * (cy + 2) + self.cells[:, 1] + 1
         w_orth, w_diag = self.factor * 1.0, self.factor * np.sqrt(2.0)  # as _build_graph
-        return grid_dijkstra_kernel(padded, flat, w_orth, w_diag, sources, predecessors)
+        return padded, flat, w_orth, w_diag
 
     def path(self, pred_row: np.ndarray, target: int) -> np.ndarray:
         """Fine waypoints from the Dijkstra source to ``target`` (source included)."""
@@ -212,11 +221,20 @@ class Geodesics:
     grid: CoarseGrid
     sources: np.ndarray
     dist: np.ndarray
-    pred: np.ndarray
-    tie: np.ndarray
+    pred: np.ndarray | None
+    """``None`` when made ``lazy`` (:meth:`CoarseGrid.geodesics`): paths from ``dist``."""
+    tie: np.ndarray | None
 
     def path(self, row: int, target: int) -> np.ndarray:
         """Fine waypoints from source ``row`` to node ``target`` (the source included)."""
+        if self.pred is None:
+            from tether.paths.geodesic_kernels import trace_kernel
+
+            nodes, tie = trace_kernel(*self.grid._kernel_grid(), self.dist[row], int(target))
+            if not tie:
+                return self.grid.centre(nodes)
+            _, pred = self.grid.distances(self.sources[row : row + 1], predecessors=True)
+            return self.grid.centre(_trace(pred[0], target))
         nodes = _trace(self.pred[row], target)
         if self.tie[row, nodes].any():
             _, pred = self.grid.distances(self.sources[row : row + 1], predecessors=True)

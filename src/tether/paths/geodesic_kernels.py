@@ -131,6 +131,34 @@ def grid_dijkstra_kernel(free, nodes, w_orth, w_diag, sources, with_pred):  # no
 
 
 @njit(cache=True)
+def _pred_of(flat, d, x, step, via_x, via_y, cost):  # noqa: ANN001, ANN202
+    """scipy's predecessor cell of the reached cell ``x`` (not a source), and its tie flag.
+
+    The neighbour ``u`` with ``d(u) < d(x)`` and ``d(u) + w(u, x) == d(x)`` of smallest
+    ``d(u)``; ``tie`` when two such neighbours share that label (see the module docstring).
+    """
+    dx = d[x]
+    best = -1
+    best_d = np.inf
+    tie = False
+    for j in range(8):
+        u = x + step[j]
+        if not flat[u]:
+            continue
+        if j >= 4 and not (flat[x + via_x[j]] and flat[x + via_y[j]]):
+            continue
+        du = d[u]
+        if du < dx and du + cost[j] == dx:
+            if du < best_d:
+                best = u
+                best_d = du
+                tie = False
+            elif du == best_d:
+                tie = True
+    return best, tie
+
+
+@njit(cache=True)
 def _predecessors(flat, d, nodes, node_of, step, via_x, via_y, cost, p, t):  # noqa: ANN001, ANN202
     """scipy's predecessor of every reached node but the source, and its ``tie`` flag."""
     for i in range(len(nodes)):
@@ -138,23 +166,44 @@ def _predecessors(flat, d, nodes, node_of, step, via_x, via_y, cost, p, t):  # n
         dx = d[x]
         if dx == 0.0 or dx == np.inf:  # the source (edges are positive) or unreached
             continue
-        best = -1
-        best_d = np.inf
-        for j in range(8):
-            u = x + step[j]
-            if not flat[u]:
-                continue
-            if j >= 4 and not (flat[x + via_x[j]] and flat[x + via_y[j]]):
-                continue
-            du = d[u]
-            if du < dx and du + cost[j] == dx:
-                if du < best_d:
-                    best = u
-                    best_d = du
-                    t[i] = False
-                elif du == best_d:
-                    t[i] = True
+        best, tie = _pred_of(flat, d, x, step, via_x, via_y, cost)
+        t[i] = tie
         p[i] = node_of[best]
+
+
+@njit(cache=True)
+def trace_kernel(free, nodes, w_orth, w_diag, dist_row, target):  # noqa: ANN001, ANN201
+    """Nodes from the source of ``dist_row`` to node ``target`` and whether one is a tie.
+
+    The path that :func:`grid_dijkstra_kernel`'s predecessors (``with_pred``) give,
+    computed from the distances of one source alone (``dist_row``, ``(n,)``, as that
+    kernel returns them) for the nodes of this one path: the same
+    :func:`_pred_of` rule, node by node from ``target`` back to the source.
+    ``free`` and ``nodes`` as for :func:`grid_dijkstra_kernel`.
+    """
+    width = free.shape[1]
+    flat = free.ravel()
+    d = np.full(free.size, np.inf)
+    node_of = np.full(free.size, NO_PRED, np.int32)
+    for i in range(len(nodes)):
+        d[nodes[i]] = dist_row[i]
+        node_of[nodes[i]] = i
+    step, via_x, via_y = _offsets(width)
+    cost = np.empty(8)
+    cost[:4] = w_orth
+    cost[4:] = w_diag
+    out = [np.int64(target)]
+    any_tie = False
+    x = nodes[target]
+    while d[x] != 0.0 and d[x] != np.inf:
+        best, tie = _pred_of(flat, d, x, step, via_x, via_y, cost)
+        any_tie = any_tie or tie
+        out.append(np.int64(node_of[best]))
+        x = best
+    path = np.empty(len(out), np.intp)
+    for i in range(len(out)):
+        path[i] = out[len(out) - 1 - i]
+    return path, any_tie
 
 
 def warm_up() -> None:
@@ -162,5 +211,7 @@ def warm_up() -> None:
     free = np.zeros((5, 5), dtype=bool)
     free[1:4, 1:4] = True
     nodes = np.flatnonzero(free.ravel())
+    w_diag = 3.0 * np.sqrt(2.0)
     for with_pred in (False, True):
-        grid_dijkstra_kernel(free, nodes, 3.0, 3.0 * np.sqrt(2.0), np.array([4]), with_pred)
+        dist = grid_dijkstra_kernel(free, nodes, 3.0, w_diag, np.array([4]), with_pred)[0]
+    trace_kernel(free, nodes, 3.0, w_diag, dist[0], 0)

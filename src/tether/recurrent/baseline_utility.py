@@ -165,7 +165,7 @@ class UtilityStrategy:
         nodes_arr = np.asarray(nodes)
         pos = coarse.centre(nodes_arr)
         gain = window_counts(~known, pos, int(round(sim.cfg.sensor_range_cells)))
-        geo = coarse.geodesics(src)
+        geo = coarse.geodesics(src, lazy=True)
         d = geo.dist[:, nodes_arr]
         util = gain[None, :] / np.maximum(d, 1.0) ** 2  # eq. (1) per robot
         util[~np.isfinite(d)] = -1.0

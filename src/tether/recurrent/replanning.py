@@ -288,7 +288,6 @@ class RecurrentStrategy:
         row = {int(r): k for k, r in enumerate(movable)}
         ready_rows = [row[int(r)] for r in ready_ids]
         utilities = frontier_utilities(graph, dist[ready_rows], exclude=fixed)
-        nxg = graph.to_networkx()
         record: dict[str, Any] = {
             "step": sim.t,
             "n_ready": len(ready_ids),
@@ -304,6 +303,7 @@ class RecurrentStrategy:
             self.plans.append(record)
             sim.log("plan", **record)
             return
+        nxg = graph.to_networkx()
         conf = optimal_configuration(
             nxg,
             0,
@@ -379,7 +379,7 @@ class RecurrentStrategy:
         src = graph.coarse.node_at(points)
         if (src < 0).any():
             raise RuntimeError("a robot stands outside the known traversable space")
-        geo = graph.coarse.geodesics(src)
+        geo = graph.coarse.geodesics(src, lazy=True)
         return geo.dist[:, graph.nodes], geo
 
     def _deploy(

@@ -46,13 +46,15 @@ from math import comb
 import numpy as np
 
 from tether import jit
+from tether.recurrent.planning.complete import complete_configuration
 from tether.recurrent.planning.problem import Problem
-from tether.recurrent.planning.steiner import _path_edges, dreyfus_wagner
+from tether.recurrent.planning.steiner import dreyfus_wagner
 
 CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
 FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles
 FIRST_BAND = 1 / 64  # width of the first utility band, relative to the best subset
 LOWEST_BAND_RATIO = 0.75  # a band (lo, hi] has lo >= this * hi (unless it is the last)
+BAND_SUBSETS = 20_000  # a band after a larger one is narrower in proportion
 
 
 @dataclass
@@ -68,15 +70,24 @@ class ApxResult:
     subsets_evaluated: int
 
 
-def _relax(g: np.ndarray, dist: np.ndarray, cap: int) -> np.ndarray:
+def _relax(
+    g: np.ndarray,
+    dist: np.ndarray,
+    cap: int,
+    graph: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
     """Dreyfus-Wagner relaxation ``P[s, v] = min_u g[s, u] + d(u, v)``, chunked.
 
     With the kernels on, the same integers from a compiled loop
-    (:mod:`tether.recurrent.planning.apx_kernels`).
+    (:mod:`tether.recurrent.planning.apx_kernels`); given ``graph`` (CSR ``indptr,
+    indices`` of the unit-cost graph whose hop counts clipped at ``cap`` are ``dist``)
+    from breadth-first searches on it.
     """
     if jit.enabled():
-        from tether.recurrent.planning.apx_kernels import relax_kernel
+        from tether.recurrent.planning.apx_kernels import relax_graph_kernel, relax_kernel
 
+        if graph is not None:
+            return relax_graph_kernel(np.ascontiguousarray(g), *graph, int(cap))
         return relax_kernel(np.ascontiguousarray(g), dist, int(cap))
     out = np.empty_like(g)
     step = max(1, (1 << 21) // max(1, dist.size))
@@ -176,11 +187,26 @@ class LazySteiner:
     the DP rows (``P``, ``g``, ``E``) are computed once, when first needed.
     """
 
-    def __init__(self, dist: np.ndarray, frontiers: np.ndarray, budget: int, delta: int) -> None:
+    def __init__(
+        self,
+        dist: np.ndarray,
+        frontiers: np.ndarray,
+        budget: int,
+        delta: int,
+        unit_graph: bool = False,
+    ) -> None:
         self.budget = budget
         self.cap = cap = budget + 1
         self.dtype = np.int16 if 3 * cap < np.iinfo(np.int16).max else np.int32
         self.d = d = np.minimum(dist, cap).astype(self.dtype)
+        # unit_graph: dist holds hop counts, so d == 1 are the edges (cap >= 2) and the
+        # relaxations may search the graph (apx_kernels.relax_graph_kernel)
+        self.graph = None
+        if unit_graph and cap >= 2:
+            src, dst = np.nonzero(d == 1)
+            indptr = np.zeros(d.shape[0] + 1, dtype=np.int64)
+            np.cumsum(np.bincount(src, minlength=d.shape[0]), out=indptr[1:])
+            self.graph = (indptr, dst.astype(np.int64))
         self.d0 = d[0]
         self.fd = d[frontiers]  # P[{f}][v] = d(f, v)
         self.ff = self.fd[:, frontiers]  # frontier-frontier distances (Step 6)
@@ -276,7 +302,7 @@ class LazySteiner:
         ranks = self.ranker.rank(c)
         uniq, first = store.missing(ranks)
         if len(uniq):
-            store.add(uniq, _relax(self._merge(c[first]), self.d, self.cap))
+            store.add(uniq, _relax(self._merge(c[first]), self.d, self.cap, self.graph))
         return store.get(ranks)
 
     def merged(self, c: np.ndarray) -> np.ndarray:
@@ -292,7 +318,7 @@ class LazySteiner:
         """Rows ``E[a][w] = min_u d(b,u) + d(a,u) + d(u,w)`` for frontier positions ``a``."""
         uniq, first = self.e_rows.missing(a)
         if len(uniq):
-            self.e_rows.add(uniq, _relax(self.fd[uniq] + self.d0, self.d, self.cap))
+            self.e_rows.add(uniq, _relax(self.fd[uniq] + self.d0, self.d, self.cap, self.graph))
         return self.e_rows.get(a)
 
 
@@ -367,15 +393,23 @@ def _subsets_in_band(uf: np.ndarray, s: int, lo: float, hi: float) -> np.ndarray
 def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.ndarray, ...]]:
     """genNewSubset: subsets of <= ``delta`` positions, band by band of utility.
 
-    Yields ``(util, size, combos)`` (``combos`` padded with -1 to ``delta``
-    columns) ordered by decreasing utility, increasing size, then colex rank,
-    i.e. exactly the order of a global sort; bands are disjoint utility
-    intervals ``(lo, hi]`` of doubling width, ``lo >= LOWEST_BAND_RATIO * hi``,
-    so a consumer that stops early (Step 10) never makes the later bands.
+    Yields ``(util, size, combos, lo)`` (``combos`` padded with -1 to ``delta``
+    columns; ``lo`` the band's lower end: every later subset has ``U <= lo``)
+    ordered by decreasing utility, increasing size, then colex rank, i.e. exactly
+    the order of a global sort; bands are disjoint utility intervals ``(lo, hi]``,
+    the first :data:`FIRST_BAND` times the ``delta``-th utility wide, then of
+    doubling width with ``lo >= LOWEST_BAND_RATIO * hi``, narrower when the growth
+    of the last bands predicts more than :data:`BAND_SUBSETS` subsets; a consumer
+    that stops early (Step 10) never makes the later bands.
     """
     top = float(uf[:delta].sum())
     floor = float(uf.min())  # no subset has a smaller utility (utilities are > 0)
-    hi, lo = np.inf, top - top * FIRST_BAND
+    # the first band's width scales with the delta-th utility, not the best subset's: one
+    # frontier far more useful than the rest (a robot next to it) would put every subset
+    # holding it into one band (C(109, 3) = 209 k subsets where the search stopped after
+    # 16 k, issue 14)
+    width = float(uf[min(delta, len(uf)) - 1]) * FIRST_BAND
+    hi, lo, last = np.inf, top - width, 0
     while True:
         if lo < max(floor, 1e-9 * top):
             lo = -1.0  # the last band: every subset left
@@ -390,14 +424,22 @@ def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.nda
             rank.append(ranker.rank(p))
         util_a, size_a = np.concatenate(util), np.concatenate(size)
         order = np.lexsort((np.concatenate(rank), size_a, -util_a))
-        yield util_a[order], size_a[order], combos[order]
+        yield util_a[order], size_a[order], combos[order], lo
         if lo < 0:
             return
         # widths double (as Algorithm 1's bands), but a band never reaches below
         # LOWEST_BAND_RATIO of its upper end: the number of subsets grows steeply as the
         # utility falls, and Step 10 usually stops inside the band (issue 14: one band of
         # 1.9 M subsets cost 2 s where the search stopped in its first thousands)
-        hi, lo = lo, max(2.0 * lo - top, LOWEST_BAND_RATIO * lo)
+        # ... and narrower in proportion when, at the growth from the last band to this
+        # one, it would hold more than BAND_SUBSETS subsets (they crowd at lower
+        # utilities: a wide last band was mostly made after the subset that stopped the
+        # search)
+        width = min(2.0 * width, (1.0 - LOWEST_BAND_RATIO) * lo)
+        guess = len(util_a) * max(1.0, len(util_a) / max(1, last))  # next band, same growth
+        if guess > BAND_SUBSETS:
+            width = min(width, (hi - lo if hi < np.inf else width) * BAND_SUBSETS / guess)
+        hi, lo, last = lo, lo - width, len(util_a)
 
 
 def solve_apx(problem: Problem, delta: int) -> ApxResult:
@@ -413,12 +455,13 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     # subsets only feeds the DP infeasible work (C(120, 4) = 8.2 M subsets when 3
     # robots are ready), so the subsets stop at min(delta, budget) frontiers; the
     # result is the same.
-    dp = LazySteiner(problem.dist, fr, budget, min(delta, budget))
+    dp = LazySteiner(problem.dist, fr, budget, min(delta, budget), unit_graph=True)
     uf = problem.utility[fr]
     dist_f = np.where(problem.dist > budget, np.inf, problem.dist).astype(float)
     z_best, tree_best, u_best = 0.0, {0}, 0.0
-    for util, size, combos in _bands(uf, dp.delta, dp.ranker):
-        pos, block = 0, FIRST_BLOCK
+    block = FIRST_BLOCK  # grows across bands: narrow bands do not restart at small blocks
+    for util, size, combos, lower in _bands(uf, dp.delta, dp.ranker):
+        pos = 0
         while pos < len(util) and util[pos] > z_best:
             end = pos + int(np.searchsorted(-util[pos : pos + block], -z_best, side="left"))
             block *= 2
@@ -426,11 +469,11 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
             for s in np.unique(size[pos:end]):
                 rows = np.flatnonzero(size[pos:end] == s)
                 cost[rows] = dp.steiner_costs(combos[pos + rows, :s])
-            for i in range(pos, end):
+            # the feasible subsets only: Steps 6, 12 and the closed list skip the others
+            # (util is non-increasing, so Step 10 stops at the same place)
+            for i in (np.flatnonzero(cost <= budget) + pos).tolist():
                 if util[i] <= z_best:  # Step 10
                     break
-                if cost[i - pos] > budget:  # Steps 6, 12 and the closed list
-                    continue
                 terminals = [int(v) for v in fr[combos[i, : size[i]]]]  # Step 11
                 tree_cost, edges = dreyfus_wagner(dist_f, problem.pred, [*terminals, 0])
                 assert tree_cost == cost[i - pos], "shared DP and Dreyfus-Wagner disagree"
@@ -439,7 +482,7 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
                 if z > z_best:
                     z_best, tree_best, u_best = z, verts, float(util[i])
             pos = end
-        if pos < len(util):  # Step 10 holds for every later subset
+        if pos < len(util) or lower <= z_best:  # Step 10 holds for every later subset
             break
     verts = complete_configuration(problem, tree_best)
     utility = float(problem.utility[list(verts)].sum())
@@ -449,30 +492,3 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     upper = utility if proven else min(best_possible, u_best * kk / delta)
     total = sum(dp.ranker.count(s) for s in range(1, dp.delta + 1))
     return ApxResult(verts, utility, u_best, proven, upper, total, dp.evaluated + k)
-
-
-def complete_configuration(problem: Problem, tree: set[int]) -> set[int]:
-    """Step 20: greedily hang branches to the best still-reachable frontiers.
-
-    While robots remain, connect the unoccupied frontier of highest utility
-    among those within the remaining budget (hops from the current tree) by
-    a shortest path from its nearest tree vertex.
-    """
-    verts = set(tree)
-    remaining = problem.budget - (len(verts) - 1)
-    d = problem.dist
-    while remaining > 0:
-        members = np.fromiter(verts, dtype=np.intp)
-        near = d[members]
-        src = members[np.argmin(near, axis=0)]
-        gap = near.min(axis=0)
-        cand = [
-            int(f) for f in problem.frontiers if f not in verts and gap[f] <= remaining
-        ]  # frontiers are sorted by decreasing utility
-        if not cand:
-            break
-        f = cand[0]
-        for a, b in _path_edges(problem.pred, int(src[f]), f):
-            verts.update((a, b))
-        remaining = problem.budget - (len(verts) - 1)
-    return verts

@@ -314,6 +314,14 @@ class _KeySet:
         return self.keys[at] == keys
 
     def add(self, keys: np.ndarray) -> None:
-        """Insert ``keys`` (duplicates and keys already present are fine)."""
+        """Insert ``keys`` (duplicates and keys already present are fine).
+
+        The new keys are sorted alone and inserted into the sorted set in one pass
+        (``np.union1d`` sorted the whole set again at every call: the set grows to the
+        pairs of a whole run, the keys added per plan are a few).
+        """
         if len(keys):
-            self.keys = np.union1d(self.keys, keys)
+            new = np.unique(np.asarray(keys, dtype=np.int64))
+            new = new[~self.contains(new)]
+            if len(new):
+                self.keys = np.insert(self.keys, np.searchsorted(self.keys, new), new)

@@ -16,6 +16,7 @@ Vertices are re-indexed ``0..n-1`` with the base at index 0.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import dataclass
 
@@ -25,6 +26,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, shortest_path
 
 UNREACHABLE = np.iinfo(np.int32).max // 4
+DENSE_MAX_VERTICES = 3000  # build(method="auto") uses a dense n x n matrix up to this size
 
 
 @dataclass
@@ -97,6 +99,8 @@ def build(
     utilities: Mapping[Hashable, float],
     budget: int,
     fixed: Iterable[Hashable] = (),
+    *,
+    method: str = "auto",
 ) -> Problem:
     """Transform and reduce an instance (see the module docstring).
 
@@ -107,6 +111,11 @@ def build(
     ``fixed + {b}`` is connected (the paper's readiness rule keeps the relays
     of unfinished frontiers in place) this is exactly the paper's
     transformation.
+
+    ``method``: ``"sparse"`` (the reference: scipy sparse matrices and searches),
+    ``"dense"`` (the same steps on a boolean matrix, :func:`build_dense`: the same
+    problem, without sparse fancy indexing) or ``"auto"`` (dense up to
+    :data:`DENSE_MAX_VERTICES` vertices).
     """
     validate(graph, base, utilities, budget)
     fixed = frozenset(fixed) - {base}
@@ -115,6 +124,12 @@ def build(
             raise ValueError(f"non-ready goal {v!r} is not a vertex of the graph")
     budget = int(budget)
     nodes = list(graph)
+    if method == "auto":
+        method = "dense" if len(nodes) <= DENSE_MAX_VERTICES else "sparse"
+    if method == "dense":
+        return build_dense(graph, nodes, base, utilities, budget, fixed)
+    if method != "sparse":
+        raise ValueError(f"unknown method {method!r}; expected 'auto', 'dense' or 'sparse'")
     index = {v: i for i, v in enumerate(nodes)}
     adj = adjacency(graph, index)
     b = index[base]
@@ -151,9 +166,106 @@ def build(
         ball = ball[:1]
     adj = adj[ball][:, ball].astype(float)
     labels = [nodes[i] for i in sel[ball]]
-    dist_f, pred = shortest_path(adj, unweighted=True, directed=False, return_predecessors=True)
+    return finish(labels, adj, util_all[ball], budget, fixed)
+
+
+def finish(
+    labels: list,
+    adj: sp.csr_matrix,
+    utility: np.ndarray,
+    budget: int,
+    fixed: frozenset,
+    directed: bool = False,
+) -> Problem:
+    """The :class:`Problem` of the reduced graph ``adj``: all-pairs hop distances.
+
+    scipy's search, whose distances and predecessors the solvers use. ``adj`` is
+    symmetric, so ``directed=True`` gives the same matrices as the reference's
+    ``directed=False`` (which scans every edge a second time, from the transpose,
+    where no label can improve any more; Floyd-Warshall symmetrises an already
+    symmetric matrix) in less time (test: ``tests/test_problem_dense.py``).
+    """
+    dist_f, pred = shortest_path(adj, unweighted=True, directed=directed, return_predecessors=True)
     dist = np.where(np.isfinite(dist_f), dist_f, UNREACHABLE).astype(np.int32)
-    return Problem(labels, adj, dist, pred, util_all[ball], budget, fixed)
+    return Problem(labels, adj, dist, pred, utility, budget, fixed)
+
+
+def _levels(adj: np.ndarray, sources: np.ndarray, limit: int) -> np.ndarray:
+    """Hop distance from the nearest of ``sources`` (``limit + 1`` beyond ``limit``).
+
+    Breadth-first search by rows of the boolean matrix ``adj``: exact hop counts,
+    as scipy's unweighted searches give them (up to ``limit``).
+    """
+    n = adj.shape[0]
+    depth = np.full(n, limit + 1, dtype=np.int64)
+    seen = np.zeros(n, dtype=bool)
+    seen[sources] = True
+    depth[sources] = 0
+    layer = np.asarray(sources, dtype=np.intp)
+    for level in range(1, limit + 1):
+        if not len(layer):
+            break
+        new = adj[layer].any(axis=0) & ~seen
+        layer = np.flatnonzero(new)
+        seen[layer] = True
+        depth[layer] = level
+    return depth
+
+
+def build_dense(
+    graph: nx.Graph,
+    nodes: list,
+    base: Hashable,
+    utilities: Mapping[Hashable, float],
+    budget: int,
+    fixed: frozenset,
+) -> Problem:
+    """:func:`build`'s steps on a dense boolean adjacency (inputs validated by it).
+
+    The same relays (the component of ``b`` among ``fixed + {b}``), fictitious edges,
+    order (base first), ball of radius ``budget`` and root-frontier reduction, with
+    hop counts from breadth-first searches; the reduced graph goes to :func:`finish`
+    as a CSR matrix equal to the reference's (sorted indices, data 1.0).
+    """
+    n = len(nodes)
+    index = {v: i for i, v in enumerate(nodes)}
+    if nodes == list(range(n)):  # exploration graphs: labels are the indices
+        flat = np.fromiter(itertools.chain.from_iterable(graph.edges()), dtype=np.intp)
+    else:
+        flat = np.fromiter((index[v] for e in graph.edges() for v in e), dtype=np.intp)
+    ends = flat.reshape(-1, 2)
+    a = np.zeros((n, n), dtype=bool)
+    a[ends[:, 0], ends[:, 1]] = True
+    a[ends[:, 1], ends[:, 0]] = True
+    np.fill_diagonal(a, False)
+    b = index[base]
+    keep = np.ones(n, dtype=bool)
+    if fixed:
+        fixed_idx = np.array([index[v] for v in fixed], dtype=np.intp)
+        group = np.concatenate([[b], fixed_idx])
+        reach = _levels(a[np.ix_(group, group)], np.zeros(1, np.intp), len(group))
+        relay = group[reach <= len(group)]
+        keep[fixed_idx] = False
+        extra = a[relay].any(axis=0) & keep
+        extra[b] = False
+        a[b, extra] = True
+        a[extra, b] = True
+    sel = np.flatnonzero(keep)
+    sel = np.concatenate([[b], sel[sel != b]])  # base first
+    a = a[np.ix_(sel, sel)]
+    depth = _levels(a, np.zeros(1, np.intp), budget)
+    util_all = np.array([float(utilities.get(nodes[i], 0.0)) for i in sel])
+    util_all[0] = 0.0
+    ball = np.flatnonzero(depth <= budget)  # includes 0
+    is_frontier = (util_all[ball] > 0) & (ball != 0)
+    if is_frontier.any():
+        to_f = _levels(a[np.ix_(ball, ball)], np.flatnonzero(is_frontier), budget)
+        ball = ball[depth[ball] + to_f <= budget]
+    else:
+        ball = ball[:1]
+    adj = sp.csr_matrix(a[np.ix_(ball, ball)].astype(float))
+    labels = [nodes[i] for i in sel[ball]]
+    return finish(labels, adj, util_all[ball], budget, fixed, directed=True)
 
 
 def tree_utility(problem: Problem, indices: Iterable[int]) -> float:
