@@ -45,43 +45,57 @@ def cell(row: dict, side: str, scale: float) -> str:
     return text
 
 
+def _source(path: Path, data: dict) -> str:
+    """One footnote: the JSON, its trees (old -> new), date, clock and conditions."""
+    trees = data.get("trees") or {}
+    names = " -> ".join(f"{n} {t.get('git_hash', '')[:7]}" for n, t in trees.items())
+    date = str((data.get("machine") or {}).get("date", ""))[:10]
+    cond = data.get("conditions") or ""
+    clock = data.get("clock", "cpu")
+    return f"`results/{path.name}`: {names or 'old -> new'}, {date}, {clock} clock; {cond}"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--final", type=Path, default=HERE / "results" / "issue14.json")
     ap.add_argument("--first", type=Path, default=HERE / "results" / "issue14_first_run.json")
     ap.add_argument("--update", type=Path, nargs="*", default=[])
     a = ap.parse_args()
-    final = json.loads(a.final.read_text())["rows"] if a.final.exists() else {}
-    for path in a.update:  # later runs: their "old" is main at the time, "new" the branch
-        later = json.loads(path.read_text())
-        for key, row in later["rows"].items():
-            merged = dict(final.get(key, {}))
-            merged.update({k: v for k, v in row.items() if not k.startswith("old")})
-            merged["main"], merged["main_extra"] = row["old"], row.get("old_extra")
-            merged["trees"] = later.get("trees", {})
-            final[key] = merged
     first = json.loads(a.first.read_text())["rows"] if a.first.exists() else {}
-    print("| work | goal | old (4cef8e4) | main (per row, below) | new | met? |")
-    print("| --- | --- | --- | --- | --- | --- |")
-    own: dict[str, dict] = {}
-    for key, (label, unit, scale) in LABELS.items():
-        if key in final:
-            row, main_side = final[key], "main"
-        elif key in first:
-            row, main_side = first[key], "new"
-        else:
+    base = json.loads(a.final.read_text()) if a.final.exists() else {"rows": {}}
+    rows: dict[str, dict] = {k: dict(v, main=v.get("main", v.get("new"))) for k, v in first.items()}
+    notes: list[str] = [_source(a.first, json.loads(a.first.read_text()))] if first else []
+    source = dict.fromkeys(rows, 1)
+    for path, data in [(a.final, base)] + [(p, json.loads(p.read_text())) for p in a.update]:
+        if not data["rows"]:
             continue
+        notes.append(_source(path, data))
+        for key, row in data["rows"].items():
+            merged = dict(rows.get(key, {}))
+            if path == a.final:  # the first full run: old 4cef8e4, main, new
+                merged.update(row)
+            else:  # a later run: its old tree is main at that time, its new the branch
+                merged.update({k: v for k, v in row.items() if not k.startswith("old")})
+                merged["main"], merged["main_extra"] = row["old"], row.get("old_extra")
+            rows[key] = merged
+            source[key] = len(notes)
+    print("| work | goal | old (4cef8e4) | before (the run's old tree) | new | met? | run |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for key, (label, unit, scale) in LABELS.items():
+        if key not in rows:
+            continue
+        row = rows[key]
+        if "old" not in row and "old" in first.get(key, {}):
+            row["old"], row["old_extra"] = first[key]["old"], first[key].get("old_extra")
         goal = f"{row['goal_sense']} {row['goal'] * scale:.3g} {unit}"
-        new = cell(row, "new", scale)
-        main_ = cell(row, main_side, scale)
         met = "yes" if row["met"] else "no"
-        if "trees" in row:  # re-measured later with other trees (their hashes below)
-            label += " *"
-            own[key] = row["trees"]
-        print(f"| {label} | {goal} | {cell(row, 'old', scale)} | {main_} | {new} | {met} |")
-    for key, trees in own.items():
-        names = ", ".join(f"{n} {t['git_hash'][:7]}" for n, t in trees.items())
-        print(f"\n\\* {key}: {names}")
+        print(
+            f"| {label} | {goal} | {cell(row, 'old', scale)} | {cell(row, 'main', scale)} "
+            f"| {cell(row, 'new', scale)} | {met} | [{source[key]}] |"
+        )
+    print()
+    for i, note in enumerate(notes, 1):
+        print(f"[{i}] {note}\n")
 
 
 if __name__ == "__main__":
