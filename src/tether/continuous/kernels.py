@@ -34,7 +34,7 @@ from numba import njit
 
 from tether import jit
 from tether.continuous.force_kernels import exact_force_kernel
-from tether.continuous.pair_kernels import pairs_below, pairs_in_range, row_norm
+from tether.continuous.pair_kernels import any_row_beyond, pairs_below, pairs_in_range, row_norm
 from tether.graph import small
 from tether.graph.fiedler import _TINY_REL
 from tether.graph.kernels import laplacian_dense_kernel
@@ -330,6 +330,8 @@ def warm_up() -> float:
 
     force_warm_up(q, pairs, out, nu)
     laplacian_dense_kernel(3, pairs, pf)
+    rows = np.array([0, 2], dtype=np.int64)
+    any_row_beyond(q, rows, q[rows], 1.0)
     first = np.array([0, 1], dtype=np.int64)
     seg = np.ones((1, 3))
     one = np.ones(1)

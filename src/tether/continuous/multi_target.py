@@ -92,6 +92,25 @@ def _targets(planner: RolePlanner, robots: np.ndarray, dim: int) -> np.ndarray:
     return planner.targets_of(robots) if len(robots) else np.zeros((0, dim))
 
 
+_ROW_BEYOND: list = []
+
+
+def _anchor_leaves(q: np.ndarray, held: np.ndarray, targets: np.ndarray, rz_m: float) -> bool:
+    """True if an anchored robot ``held[k]`` is ``Rz`` or farther from ``targets[k]``.
+
+    ``q`` is ``(n, dim)``, ``targets`` ``(len(held), dim)``. With the kernels, one
+    compiled call (:func:`tether.continuous.pair_kernels.any_row_beyond`, the same
+    distances as ``numpy.linalg.norm``); the numpy test otherwise (the reference).
+    """
+    if jit.enabled():
+        if not _ROW_BEYOND:  # imported once: an import statement here costs microseconds
+            from tether.continuous.pair_kernels import any_row_beyond
+
+            _ROW_BEYOND.append(any_row_beyond)
+        return bool(_ROW_BEYOND[0](q, held, targets, rz_m))
+    return bool(np.any(np.linalg.norm(q[held] - targets, axis=1) >= rz_m))
+
+
 def _traveling_forces_kernel(
     q: np.ndarray,
     v: np.ndarray,
@@ -253,8 +272,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
     def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
         lam, cache = super()._evaluate(q)
         held, targets = self._anchors()
-        if len(held) and np.any(np.linalg.norm(q[held] - targets, axis=1)
-                                >= self.params.rz_m):  # fmt: skip
+        if len(held) and _anchor_leaves(q, held, targets, self.params.rz_m):
             return -np.inf, cache  # an anchor would leave its ball: reject the sub-step
         return lam, cache
 
