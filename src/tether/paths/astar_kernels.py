@@ -32,6 +32,14 @@ def _less(f: np.ndarray, h: np.ndarray, c: np.ndarray, a: int, b: int) -> bool: 
 
 
 @njit(cache=True, inline="always")
+def _swap(f: np.ndarray, h: np.ndarray, c: np.ndarray, a: int, b: int) -> None:  # noqa: ANN202
+    """Exchange heap entries ``a`` and ``b`` of the three parallel arrays."""
+    f[a], f[b] = f[b], f[a]
+    h[a], h[b] = h[b], h[a]
+    c[a], c[b] = c[b], c[a]
+
+
+@njit(cache=True, inline="always")
 def _heuristic_at(  # noqa: ANN202
     cell: int, goal: np.ndarray, strides: np.ndarray, face: bool, euclid: bool
 ):
@@ -114,9 +122,7 @@ def astar_kernel(  # noqa: ANN201, PLR0913
                 best = left + 1
             if not _less(hf, hh, hc, best, pos):
                 break
-            hf[pos], hf[best] = hf[best], hf[pos]
-            hh[pos], hh[best] = hh[best], hh[pos]
-            hc[pos], hc[best] = hc[best], hc[pos]
+            _swap(hf, hh, hc, pos, best)
             pos = best
         gi = g_cost[i]
         if gi == closed:
@@ -147,9 +153,7 @@ def astar_kernel(  # noqa: ANN201, PLR0913
                     up = (pos - 1) // 2
                     if not _less(hf, hh, hc, pos, up):
                         break
-                    hf[pos], hf[up] = hf[up], hf[pos]
-                    hh[pos], hh[up] = hh[up], hh[pos]
-                    hc[pos], hc[up] = hc[up], hc[pos]
+                    _swap(hf, hh, hc, pos, up)
                     pos = up
     if not found:
         return np.empty(0, np.int64)
