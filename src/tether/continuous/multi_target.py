@@ -18,6 +18,8 @@ Decisions where the paper is silent are listed in ``docs/multi_target.md``.
 
 from __future__ import annotations
 
+from functools import cache
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -92,7 +94,17 @@ def _targets(planner: RolePlanner, robots: np.ndarray, dim: int) -> np.ndarray:
     return planner.targets_of(robots) if len(robots) else np.zeros((0, dim))
 
 
-_ROW_BEYOND: list = []
+@cache
+def _kernels() -> SimpleNamespace:
+    """:mod:`tether.continuous.pair_kernels` and :mod:`~tether.continuous.bookkeep_kernels`,
+    imported on first use (they load numba; an import statement per call costs
+    microseconds)."""
+    from tether.continuous import bookkeep_kernels, pair_kernels
+
+    return SimpleNamespace(
+        any_row_beyond=pair_kernels.any_row_beyond,
+        travel_stretch_kernel=bookkeep_kernels.travel_stretch_kernel,
+    )
 
 
 def _anchor_leaves(q: np.ndarray, held: np.ndarray, targets: np.ndarray, rz_m: float) -> bool:
@@ -103,11 +115,7 @@ def _anchor_leaves(q: np.ndarray, held: np.ndarray, targets: np.ndarray, rz_m: f
     distances as ``numpy.linalg.norm``); the numpy test otherwise (the reference).
     """
     if jit.enabled():
-        if not _ROW_BEYOND:  # imported once: an import statement here costs microseconds
-            from tether.continuous.pair_kernels import any_row_beyond
-
-            _ROW_BEYOND.append(any_row_beyond)
-        return bool(_ROW_BEYOND[0](q, held, targets, rz_m))
+        return bool(_kernels().any_row_beyond(q, held, targets, rz_m))
     return bool(np.any(np.linalg.norm(q[held] - targets, axis=1) >= rz_m))
 
 
@@ -396,10 +404,9 @@ class MultiTargetStrategy(ConnectivityStrategy):
     def _bookkeep(self, q: np.ndarray, q_new: np.ndarray, lam: float, t_s: float, dt: float):
         pl = self.planner
         if jit.enabled():  # the same sums and maximum, compiled
-            from tether.continuous.bookkeep_kernels import travel_stretch_kernel
-
-            far = travel_stretch_kernel(self._travelled, np.ascontiguousarray(q),
-                                        np.ascontiguousarray(q_new), pl.explorer)  # fmt: skip
+            far = _kernels().travel_stretch_kernel(
+                self._travelled, np.ascontiguousarray(q), np.ascontiguousarray(q_new), pl.explorer
+            )
             if far >= 0.0:
                 self._stretch = max(self._stretch, far)
         else:

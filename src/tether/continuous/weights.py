@@ -27,6 +27,7 @@ from the world layer's :class:`tether.world.clearance.ObstacleIndex`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cache
 
 import numpy as np
 
@@ -225,22 +226,14 @@ def _compute_weights_kernel(
 _NO_CLEARANCE = (np.zeros(0), np.zeros(0), np.zeros((0, 3)))
 
 
-_LOADED: list = []
-
-
+@cache
 def _kernels() -> tuple:
     """``evaluate_kernel``, ``evaluate_fiedler_kernel`` and ``no_obstacles``, imported
     on first use (numba only when kernels run; an import statement in the hot function
     costs microseconds per call)."""
-    if not _LOADED:
-        from tether.continuous.kernels import (
-            evaluate_fiedler_kernel,
-            evaluate_kernel,
-            no_obstacles,
-        )
+    from tether.continuous.kernels import evaluate_fiedler_kernel, evaluate_kernel, no_obstacles
 
-        _LOADED.append((evaluate_kernel, evaluate_fiedler_kernel, no_obstacles))
-    return _LOADED[0]
+    return evaluate_kernel, evaluate_fiedler_kernel, no_obstacles
 
 
 def _evaluate_kernel(
