@@ -222,8 +222,8 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
         return original_fused(*args)
 
     monkeypatch.setattr(fiedler_module, "_small", counting_small)
-    monkeypatch.setattr(weights, "_LOADED", [(kernels.evaluate_kernel, counting_fused,
-                                               kernels.no_obstacles)])  # fmt: skip
+    monkeypatch.setattr(weights, "_kernels", lambda: (kernels.evaluate_kernel, counting_fused,
+                                                      kernels.no_obstacles))  # fmt: skip
     sc = load_scenario("multi_target_empty")
     sc.team.n_robots = 20
     sc.strategy.params["fiedler_method"] = method
