@@ -33,7 +33,7 @@ from scipy import stats
 from tether.config import load_scenario
 from tether.experiments.sweep import run_sweep
 from tether.runfolder import machine
-from tether.viz.plots import plt
+from tether.viz.plots import pyplot
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("empty", "town", "office")
@@ -146,6 +146,7 @@ def markdown(result: dict, sizes: list[int]) -> str:
 
 
 def figure(result: dict, sizes: list[int], path: Path) -> None:
+    plt = pyplot()
     fig, axes = plt.subplots(len(METRICS), len(SCENES), figsize=(11, 10), squeeze=False)
     for col, scene in enumerate(SCENES):
         entry = result["scenes"].get(scene)

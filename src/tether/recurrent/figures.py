@@ -6,10 +6,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from matplotlib.collections import LineCollection
 
 from tether.viz import style
-from tether.viz.plots import TIME_LABEL, plt
+from tether.viz.plots import TIME_LABEL, pyplot
 from tether.world.grid import OccupancyGrid
 
 
@@ -22,7 +21,7 @@ def explored_over_time(
     title: str = "explored area known at the base station",
 ) -> Any:
     """Explored area known at the BS (%) and robots connected to it, against time (s)."""
-    fig, ax = plt.subplots(figsize=(6.4, 3.6), layout="constrained")
+    fig, ax = pyplot().subplots(figsize=(6.4, 3.6), layout="constrained")
     ax.set_facecolor(style.BACKGROUND)
     (explored_line,) = ax.plot(
         t_s,
@@ -81,11 +80,13 @@ def known_map(
     w_in = min(max(5.5, 4.0 / aspect), 9.0, 10.0 / aspect)
     h_in = w_in * aspect
     left, bottom, right, top = 0.8, 0.6, 2.8, 0.5  # margins (in): labels, legend, title
-    fig = plt.figure(figsize=(left + w_in + right, bottom + h_in + top))
+    fig = pyplot().figure(figsize=(left + w_in + right, bottom + h_in + top))
     fw, fh = fig.get_size_inches()
     ax = fig.add_axes((left / fw, bottom / fh, w_in / fw, h_in / fh))
     style.draw_obstacles_topdown(ax, grid, known=known)
     trails = np.asarray(trails_m, dtype=float)[:, :, :2]
+    from matplotlib.collections import LineCollection  # loaded with pyplot already
+
     ax.add_collection(
         LineCollection(
             list(trails.transpose(1, 0, 2)), colors=style.TRAIL, lw=0.8, alpha=0.6, zorder=2

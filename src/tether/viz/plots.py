@@ -14,24 +14,37 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from functools import cache
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-from matplotlib.patches import Rectangle  # noqa: E402
+from tether.viz import style
 
-from tether.viz import style  # noqa: E402
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 #: width of one snapshot panel (inches)
 PANEL_IN = 3.6
 #: width of the legend column of a snapshot (inches)
 LEGEND_IN = 2.1
 TIME_LABEL = "time (s)"
+
+
+@cache
+def pyplot() -> ModuleType:
+    """``matplotlib.pyplot`` on the Agg backend, imported when the first figure is drawn.
+
+    pyplot (with the artists it loads) is about half a second of a run's start-up; a run
+    or a sweep trial with ``figures: false`` never pays it
+    (``tests/test_lazy_pyplot.py``).
+    """
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
 
 
 def link_range_m(scenario: Any, params: Any = None) -> float | None:
@@ -58,7 +71,7 @@ def series_over_time(
     title: str | None = None,
 ) -> Figure:
     """One line per labelled ``(x, y)`` series, with an optional horizontal reference."""
-    fig, ax = plt.subplots(figsize=(6.4, 3.6), layout="constrained")
+    fig, ax = pyplot().subplots(figsize=(6.4, 3.6), layout="constrained")
     for label, (x, y) in series.items():
         ax.plot(x, y, label=label, lw=1.3)
     if reference is not None:
@@ -138,6 +151,8 @@ class _Panel:
         bounds = getattr(self.world, "bounds_m", None)
         if grid is None and bounds is not None:  # free space with walls around it
             b = np.asarray(bounds, dtype=float)[:, :2]
+            from matplotlib.patches import Rectangle
+
             self.top.add_patch(
                 Rectangle(b[0], *(b[1] - b[0]), fill=False, ec=style.OCCUPIED, lw=1.5, zorder=1)
             )
@@ -159,6 +174,8 @@ class _Panel:
         views: list[tuple[Any, list[int]]] = [(self.top, [0, 1])]
         if self.side is not None:
             views.append((self.side, [0, 2]))
+        from matplotlib.collections import LineCollection
+
         for ax, axes in views:
             ax.add_collection(
                 LineCollection(_segments(nodes, pairs, axes), colors=rgba, lw=1.1, zorder=3)
@@ -249,7 +266,7 @@ def snapshot(
     grid = getattr(world, "grid", None)
     has_obstacles = bool(getattr(world, "has_obstacles", False))
     colorbar = three_d and has_obstacles
-    fig = plt.figure(
+    fig = pyplot().figure(
         figsize=(PANEL_IN * k + LEGEND_IN + (0.8 if colorbar else 0.0), top_h + side_h + 1.0),
         layout="constrained",
     )
