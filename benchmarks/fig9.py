@@ -142,6 +142,11 @@ def markdown(result: dict, sizes: list[int]) -> str:
         out.append(f"All scenes: {trials} trials, {total:,.0f} trial-seconds "
                    f"({total / trials:.0f} s per trial); 1,800 trials on 2 cores at that "
                    f"rate: {1800 * total / trials / 2 / 3600:.1f} h.")  # fmt: skip
+    wall = result.get("wall_time_s", {})
+    if wall and set(wall) == set(result["scenes"]):  # the run that made these trials
+        parts = ", ".join(f"{scene} {s:,.0f} s" for scene, s in wall.items())
+        out.append(f"Wall time of the run that made them: {sum(wall.values()):,.0f} s "
+                   f"({sum(wall.values()) / 3600:.2f} h; {parts}).")  # fmt: skip
     return "\n".join(out)
 
 
