@@ -186,3 +186,25 @@ def test_helpers_move_the_same_with_the_compiled_sub_step_and_without() -> None:
     (m_on, q_on), (m_off, q_off) = runs
     assert m_on["helper_robot_s"] > 0 and m_on["help_requests"] == 1
     np.testing.assert_array_equal(q_on, q_off)
+
+
+def test_help_lambda_factor_scales_only_the_helpers_force_the_same_compiled_or_not() -> None:
+    """``help_lambda_factor``: nothing changes before the first request (steps 268-274);
+    then the helpers move differently, lambda2 stays above 0, and the fused sub-step
+    (kernels on) applies the factor exactly as the reference does."""
+    pytest.importorskip("numba")
+    with jit.using(True):
+        _, base, _ = run_deadlock(300)
+    runs = []
+    for on in (True, False):
+        with jit.using(on):
+            metrics, rec, _ = run_deadlock(300, help_lambda_factor=0.1)
+        runs.append((metrics, np.array(rec.positions)))
+    (m_on, q_on), (m_off, q_off) = runs
+    np.testing.assert_array_equal(q_on, q_off)
+    q_base = np.array(base.positions)
+    asked = min(e["step"] for e in base.events if e["kind"] == "help_requested")
+    np.testing.assert_array_equal(q_on[: asked + 1], q_base[: asked + 1])
+    assert np.abs(q_on[-1] - q_base[-1]).max() > 1e-3  # the helpers moved otherwise
+    assert m_on["helper_robot_s"] > 0 and m_on["min_lambda2_weighted"] > 0
+    assert m_on["connected_all_steps"] and m_on["collisions"] == 0

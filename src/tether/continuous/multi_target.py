@@ -361,24 +361,29 @@ class MultiTargetStrategy(ConnectivityStrategy):
         p, helpers = self.params, self._helpers
         parents_m = self.help.parent_m[helpers]
 
-        def helped(qq: np.ndarray, vv: np.ndarray, f: np.ndarray) -> np.ndarray:
-            """Recruited robots follow their parent instead (a secondary's ``f_i`` too)."""
+        def helped(qq: np.ndarray, vv: np.ndarray, f: np.ndarray, f_lambda: np.ndarray
+                   ) -> np.ndarray:  # fmt: skip
+            """Recruited robots follow their parent instead (a secondary's ``f_i`` too);
+            with ``help_lambda_factor`` their ``f_lambda`` is scaled by it
+            (:mod:`~tether.continuous.recruit`)."""
             f[helpers] = help_force(qq[helpers], vv[helpers], parents_m, keep_m=p.rs_inner_m,
                                     kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
                                     max_force_n=p.max_travel_force_n)  # fmt: skip
+            if p.help_lambda_factor is not None:
+                f[helpers] -= (1.0 - p.help_lambda_factor) * f_lambda[helpers]
             return f
 
         def external(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray) -> np.ndarray:
             f = traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate, p,
                                  anchors=self._held)  # fmt: skip
-            return helped(qq, vv, f) if len(helpers) else f
+            return helped(qq, vv, f, f_lambda) if len(helpers) else f
 
         fused = None
         if jit.enabled() and self.estimator is None:  # one compiled call per sub-step
 
             def adjust(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray,
                        f_ext: np.ndarray) -> np.ndarray:  # fmt: skip
-                return helped(qq, vv, f_ext)
+                return helped(qq, vv, f_ext, f_lambda)
 
             fused = fused_total_force(self, travel_args(self.planner, self.consensus.estimate,
                                                         self.params, self._held),

@@ -73,6 +73,10 @@ class MultiTargetParams(ConnectivityStrategyParams):
         description="what ends a help request: the prime's next "
         "progress, or the end of its turn (arrival, drop, a new prime)",
     )
+    help_lambda_factor: float | None = Field(
+        default=None, gt=0, le=1,
+        description="a helper's connectivity force is scaled by this (None: not scaled)",
+    )  # fmt: skip
     max_travel_force_n: float = Field(default=10.0, gt=0)
     election_criterion: Literal["path_length", "distance"] = "path_length"
     messages: MessagesConfig = Field(default_factory=MessagesConfig)
