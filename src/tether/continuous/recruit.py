@@ -25,6 +25,19 @@ target is dropped as before.
 Each robot's state uses only what its neighbours sent: its hop count is one
 more than the smallest hop count among the requests it holds whose depth
 allows another hop (ties to the lower sender index).
+
+Optionally (``help_lambda_factor = g``, default off) a helper's own connectivity
+force is scaled by ``g`` while it helps: ``M dv/dt = -B v + g f_lambda + f_help``.
+Without it a team that has closed a loop round an obstacle it cannot overfly holds
+every link of the loop (each one raises lambda2, so ``f_lambda`` defends it with up
+to ~100 N against the helpers' 10 N), and a prime hanging from the loop cannot
+reach a target beyond the loop's reach (``docs/multi_target.md``, *The dropped
+target*). Scaled down, it lets the helpers' pull towards their parents (a
+breadth-first tree rooted at the prime) win over the defence of links the prime
+does not need. Connectivity still holds: the integrator accepts a sub-step only if
+lambda2 keeps half its margin (:mod:`tether.continuous.dynamics`), and the other
+robots' force is unchanged. Measured on the campaign's helped trials with
+``benchmarks/rerun_helped.py`` (``docs/multi_target.md``).
 """
 
 from __future__ import annotations
