@@ -14,10 +14,13 @@ import argparse
 import json
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from tether.runfolder import machine
 
 CODE = "import sys; from tether.cli import main; main(sys.argv[1:])"
 
@@ -50,7 +53,9 @@ def main() -> None:
             if i:
                 res[side].append(cpu)
             print(f"{side} {cpu:.2f} s", flush=True)
-    out = {"scenario": a.scenario, "trees": {k: str(v) for k, v in trees.items()}, "cpu_s": res}
+    out = {"machine": machine(), "scenario": a.scenario,
+           "trees": {k: str(v) for k, v in trees.items()}, "cpu_s": res,
+           "median_cpu_s": {k: statistics.median(v) for k, v in res.items() if v}}  # fmt: skip
     print(json.dumps(out))
     if a.out:
         a.out.write_text(json.dumps(out, indent=1) + "\n")

@@ -6,7 +6,8 @@ nobody is recruited, so it is bit for bit the same (the request draws no random 
 Its effect on a whole campaign is therefore measured by re-running those trials alone.
 
 Reads ``RUNS/<scene>/sweep.parquet`` of a finished campaign (``benchmarks/fig9.py``),
-picks the trials with ``help_requests > 0`` (configuration seeds below ``--seeds``),
+picks the trials with ``help_requests > 0`` (configuration seeds below ``--seeds``;
+with ``--only-failed`` those that failed the completeness check),
 re-runs each trial's ``scenario.yaml`` with the ``--set`` overrides (one process per
 trial, ``--workers`` at once) into ``OUT``, and prints per scene: the trials that pass
 the completeness check before and after (every target, lambda2 > 0, no collision, as
@@ -17,7 +18,7 @@ trial's before -> after. Writes the table as JSON (``--json``).
 Usage::
 
     python benchmarks/rerun_helped.py RUNS --out OUT --set strategy.params.help_lambda_factor=0.1
-        [--seeds 18] [--scenes town office empty] [--workers 2] [--json PATH]
+        [--seeds 18] [--scenes town office empty] [--workers 2] [--only-failed] [--json PATH]
 """
 
 from __future__ import annotations
@@ -37,7 +38,8 @@ from tether.runfolder import machine
 from tether.runner import run
 
 KEYS = ("targets_total", "targets_reached", "targets_dropped", "completion_time_s",
-        "min_lambda2_weighted", "collisions", "help_requests", "helper_robot_s")  # fmt: skip
+        "min_lambda2_weighted", "collisions", "help_requests", "helper_robot_s",
+        "mean_explorer_distance_m", "max_explorer_stretch_m", "mean_lambda2_weighted")  # fmt: skip
 
 
 def rerun(run_dir: str, out_dir: str, overrides: list[str]) -> dict:
@@ -56,12 +58,18 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=100, help="configuration seeds below this")
     ap.add_argument("--scenes", nargs="+", default=["town", "office", "empty"])
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--only-failed", action="store_true",
+                    help="only the helped trials that failed the completeness check")  # fmt: skip
     ap.add_argument("--json", type=Path, help="write the comparison here")
     a = ap.parse_args()
     jobs = []
     for scene in a.scenes:
         for row in pq.read_table(a.runs / scene / "sweep.parquet").to_pylist():
-            if (row["help_requests"] or 0) > 0 and row["seed"] < a.seeds:
+            if (
+                (row["help_requests"] or 0) > 0
+                and row["seed"] < a.seeds
+                and (not a.only_failed or failure(row))
+            ):
                 rel = Path(row["run_dir"]).relative_to(a.runs)
                 jobs.append((scene, row, str(a.out / rel)))
     print(f"{len(jobs)} trials asked for help; re-running with {a.overrides}", flush=True)
