@@ -30,10 +30,9 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
-import yaml
 
 from fig9 import failure
-from tether.config import apply_overrides
+from tether.quicksize import load_scenario_at
 from tether.runfolder import machine
 from tether.runner import run
 
@@ -43,10 +42,10 @@ KEYS = ("targets_total", "targets_reached", "targets_dropped", "completion_time_
 
 
 def rerun(run_dir: str, out_dir: str, overrides: list[str]) -> dict:
-    """One trial again with the overrides; its summary's keys of interest."""
-    data = yaml.safe_load((Path(run_dir) / "scenario.yaml").read_text())
-    data = apply_overrides(data, overrides, run_dir)
-    summary = run(data, out_dir=out_dir, figures=False).summary
+    """One trial again with the overrides (as ``tether run ... --set`` applies them); its
+    summary's keys of interest."""
+    scenario = load_scenario_at(Path(run_dir) / "scenario.yaml", overrides=overrides)
+    summary = run(scenario, out_dir=out_dir, figures=False).summary
     return {k: summary.get(k) for k in KEYS}
 
 

@@ -52,6 +52,7 @@ from tether.recurrent.report_settings import (
 )
 from tether.recurrent.report_tables import run_statistics
 from tether.runfolder import machine
+from tether.viz.plots import pyplot
 
 __all__ = ["combination", "make_report", "paper_scenario", "trial_scenario"]
 
@@ -233,10 +234,7 @@ def _figures(
     runs: int,
     thetas: tuple[int, ...],
 ) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     def mean_curve(m: str, label: str) -> tuple[np.ndarray, np.ndarray]:
         curves = np.array([_curve(run_dir(out, m, label, k)) for k in range(runs)])
