@@ -40,8 +40,8 @@ def test_compiled_test_decides_as_numpy_near_and_at_the_radius(dim: int, seed: i
         dist = r * (1.0 + rng.choice([-1e-15, -(2**-52), 0.0, 2**-52, 1e-15, -0.3, 0.3], k))
         targets = q[rows] + dist[:, None] * u
         rk = r
-        if k and rng.random() < 0.3:  # the radius exactly one robot's numpy distance
-            rk = float(np.linalg.norm(q[rows[0]] - targets[0]))
+        if k and rng.random() < 0.3:  # the radius exactly one robot's numpy (row) distance
+            rk = float(np.linalg.norm((q[rows[0]] - targets[0])[None], axis=1)[0])
             assert numpy_test(q, rows, targets, rk)
         want = numpy_test(q, rows, targets, rk)
         assert any_row_beyond(q, rows, targets, rk) == want

@@ -18,7 +18,17 @@ PACKAGE = SRC / "tether"
 
 # (layer, module prefixes); the longest matching prefix decides a module's layer
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
-    ("base", ("tether", "tether.errors", "tether.registry", "tether.geometry", "tether.config")),
+    (
+        "base",
+        (
+            "tether",
+            "tether.errors",
+            "tether.registry",
+            "tether.geometry",
+            "tether.floats",
+            "tether.config",
+        ),
+    ),
     ("world", ("tether.world",)),
     ("graph", ("tether.graph",)),
     ("sensing", ("tether.sensing", "tether.comm")),

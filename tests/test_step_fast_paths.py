@@ -15,10 +15,11 @@ import math
 import numpy as np
 import pytest
 
-from tether import jit
+from tether import floats, jit
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.bookkeep_kernels import min_link_distance_kernel, travel_stretch_kernel
 from tether.continuous.election import Election
+from tether.continuous.pair_kernels import row_norm
 from tether.continuous.tracking import PathSet, TrackedPath
 from tether.paths.bspline import SplinePath
 
@@ -62,11 +63,14 @@ def test_min_link_distance_kernel_is_the_numpy_minimum(dim: int) -> None:
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_row_norms_are_the_norms_of_each_row(dim: int) -> None:
-    """``norm(axis=1)`` equals ``norm`` row by row: the roles' vectorised distances rely on it."""
+    """``norm(axis=1)`` equals :func:`tether.floats.norm` row by row (and the kernels' row
+    norm): the roles' vectorised distances and their robot-by-robot reference rely on it.
+    (numpy's own norm of one vector is a BLAS dot, which sums differently on some CPUs.)"""
     rng = np.random.default_rng(10 + dim)
     x = rng.normal(size=(20000, dim)) * rng.uniform(1e-3, 1e3, (20000, 1))
-    rows = np.array([float(np.linalg.norm(r)) for r in x])
+    rows = np.array([floats.norm(r) for r in x])
     np.testing.assert_array_equal(np.linalg.norm(x, axis=1), rows)
+    np.testing.assert_array_equal([row_norm(r) for r in x[:2000]], rows[:2000])
 
 
 def test_distance_to_target_and_target_arrays_follow_the_targets() -> None:

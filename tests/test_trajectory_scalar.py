@@ -2,7 +2,9 @@
 
 The leader's carrot is computed every ``silent`` step; the scalar clips and norms
 replaced ``np.clip``/``np.linalg.norm`` calls. Here the previous numpy formulas are
-the reference, on random polylines and points, bit for bit.
+the reference, on random polylines and points, bit for bit, with their dot products and
+norms summed in coordinate order (``np.add.reduce`` of a few elements, the row norm):
+numpy's ``@`` of two vectors is a BLAS call, whose summation depends on the CPU.
 """
 
 from __future__ import annotations
@@ -29,10 +31,10 @@ def _project_numpy(p: Polyline, point: np.ndarray, s_min: float, window_m: float
         if s1 < s_min or s0 > s_min + window_m:
             continue
         ab = b - a
-        denom = float(ab @ ab)
-        t = 0.0 if denom == 0 else float(np.clip((point - a) @ ab / denom, 0.0, 1.0))
+        denom = float(np.add.reduce(ab * ab))
+        t = 0.0 if denom == 0 else float(np.clip(np.add.reduce((point - a) * ab) / denom, 0, 1))
         s = float(np.clip(s0 + t * (s1 - s0), s_min, s_min + window_m))
-        d = float(np.linalg.norm(_at_numpy(p, s) - point))
+        d = float(np.linalg.norm((_at_numpy(p, s) - point)[None], axis=1)[0])
         if d < best_d:
             best_s, best_d = s, d
     return best_s

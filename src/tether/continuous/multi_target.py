@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from tether import jit
+from tether import floats, jit
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.consensus import EfficiencyConsensus
 from tether.continuous.dynamics import integrate
@@ -326,7 +326,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         where = np.flatnonzero(robots == prime)
         if len(where):  # eqs. (11)-(12)
             k = int(where[0])
-            err = (1 - p.alpha_lambda) * np.linalg.norm(states.velocity_mps[k] - v[prime]) \
+            err = (1 - p.alpha_lambda) * floats.norm(states.velocity_mps[k] - v[prime]) \
                 + p.alpha_lambda * states.distance_m[k]  # fmt: skip
             band = (p.xc_frac * p.v_cruise_mps, p.xm_frac * p.v_cruise_mps)
             self._prime_eff = float(efficiency(np.array([err]), *band)[0])

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from tether import jit
+from tether import floats, jit
 from tether.continuous.targets import Target, TargetBook
 from tether.continuous.tracking import PathSet, TrackedPath
 from tether.paths.astar import plan_path, planning_grid
@@ -147,7 +147,7 @@ class RolePlanner:
         d = np.full(len(q), np.inf)
         for i, z in enumerate(self.target):
             if z is not None:
-                d[i] = float(np.linalg.norm(q[i] - z.position_m))
+                d[i] = floats.norm(q[i] - z.position_m)
         return d
 
     def on_path(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tether import floats
 from tether.continuous.tracking import PathState
 
 
@@ -53,7 +54,8 @@ def anchor_potential(distance_m: np.ndarray, rz_m: float, kz: float) -> np.ndarr
     """``V_anchor(l) = -k_z (2 Rz / pi) ln cos(l pi / (2 Rz))`` (eq. (6)); ``inf`` from ``Rz``."""
     d = np.asarray(distance_m, dtype=float)
     with np.errstate(divide="ignore"):
-        v = -kz * (2 * rz_m / np.pi) * np.log(np.cos(np.minimum(d, rz_m) * np.pi / (2 * rz_m)))
+        c = floats.cos(np.minimum(d, rz_m) * np.pi / (2 * rz_m))
+        v = -kz * (2 * rz_m / np.pi) * floats.log(c)
     return np.where(d >= rz_m, np.inf, v)
 
 
@@ -67,7 +69,7 @@ def anchor_force(q: np.ndarray, z: np.ndarray, rz_m: float, kz: float) -> np.nda
     diff = q - z
     dist = np.linalg.norm(diff, axis=1)
     inside = dist < rz_m
-    mag = np.where(inside, kz * np.tan(np.minimum(dist, rz_m) * np.pi / (2 * rz_m)), np.nan)
+    mag = np.where(inside, kz * floats.tan(np.minimum(dist, rz_m) * np.pi / (2 * rz_m)), np.nan)
     unit = diff / np.maximum(dist, 1e-300)[:, None]
     return -mag[:, None] * unit
 
@@ -86,7 +88,7 @@ def efficiency(x: np.ndarray, xc: float, xm: float) -> np.ndarray:
     if not 0 <= xc < xm:
         raise ValueError(f"need 0 <= x_c < x_M (got {xc}, {xm})")
     x = np.asarray(x, dtype=float)
-    mid = 0.5 + 0.5 * np.cos((np.clip(x, xc, xm) - xc) / (xm - xc) * np.pi)
+    mid = 0.5 + 0.5 * floats.cos((np.clip(x, xc, xm) - xc) / (xm - xc) * np.pi)
     return np.where(x <= xc, 1.0, np.where(x >= xm, 0.0, mid))
 
 
@@ -107,4 +109,4 @@ def rho(theta: np.ndarray, lambda_hat: np.ndarray, sigma: float) -> np.ndarray:
         raise ValueError(f"sigma must be >= 1 (got {sigma})")
     x = np.clip(np.asarray(theta, dtype=float), 0.0, 1.0)
     y = np.clip(np.asarray(lambda_hat, dtype=float), 0.0, 1.0)
-    return (1 - x) * y**sigma + x * (1 - (1 - y) ** sigma)
+    return (1 - x) * floats.power(y, sigma) + x * (1 - floats.power(1 - y, sigma))

@@ -31,7 +31,7 @@ from functools import cache
 
 import numpy as np
 
-from tether import jit
+from tether import floats, jit
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import smooth_step, smooth_step_log_derivative
 from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
@@ -134,14 +134,13 @@ def collision_factor(n: int, coll_pairs: np.ndarray, gamma: np.ndarray) -> np.nd
     logc = np.zeros(n)
     zero = np.zeros(n, dtype=bool)
     if len(coll_pairs):
-        with np.errstate(divide="ignore"):
-            lg = np.log(gamma)
+        lg = floats.log(gamma)  # the C library's, as the kernel's (-inf where gamma = 0)
         finite = gamma > 0
         np.add.at(logc, coll_pairs[finite, 0], lg[finite])
         np.add.at(logc, coll_pairs[finite, 1], lg[finite])
         zero[coll_pairs[~finite, 0]] = True
         zero[coll_pairs[~finite, 1]] = True
-    return np.where(zero, 0.0, np.exp(logc))
+    return np.where(zero, 0.0, floats.exp(logc))
 
 
 def compute_weights(

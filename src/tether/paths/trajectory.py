@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import bisect
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from tether import floats
 
 
 def _clip(x: float, lo: float, hi: float) -> float:
@@ -48,7 +49,7 @@ class Polyline:
         # per-segment values the leader's carrot needs every step, computed once (the
         # same expressions as before, so the same bits): b - a, |b - a|^2, arc lengths
         self._seg = seg
-        self._denom = [float(ab @ ab) for ab in seg]
+        self._denom = [floats.dot(ab, ab) for ab in seg]
         self._cum_list = self._cum.tolist()
         self._seg_len_list = self._seg_len.tolist()
         self._length_m = float(self._cum[-1])
@@ -84,11 +85,11 @@ class Polyline:
             if s1 < s_min or s0 > s_min + window_m:
                 continue
             a, ab, denom = self.waypoints[k], self._seg[k], self._denom[k]
-            # (point - a) @ ab: numpy computes a vector @ vector product by its dot
-            t = 0.0 if denom == 0 else _clip((point - a).dot(ab) / denom, 0.0, 1.0)
+            # (point - a) . ab summed in coordinate order (numpy's dot is BLAS: by CPU)
+            t = 0.0 if denom == 0 else _clip(floats.dot(point - a, ab) / denom, 0.0, 1.0)
             s = _clip(s0 + t * (s1 - s0), s_min, s_min + window_m)
             gap = self.at(s) - point
-            d = math.sqrt(gap.dot(gap))  # np.linalg.norm of a vector: sqrt(x.dot(x))
+            d = floats.norm(gap)
             if d < best_d:
                 best_s, best_d = s, d
         return best_s

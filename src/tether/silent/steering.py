@@ -39,7 +39,7 @@ from typing import Literal
 
 import numpy as np
 
-from tether import jit
+from tether import floats, jit
 from tether.geometry import unit
 from tether.graph import expand_rows
 
@@ -143,12 +143,12 @@ def _pair_bounds(
     d_m = d_max_m - radial_error_m  # definition of d_m (section III)
     dist = np.linalg.norm(measured, axis=1)
     cos_phi = np.einsum("kd,kd->k", u, unit(measured))
-    phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
+    phi = floats.arccos(np.clip(cos_phi, -1.0, 1.0))
     worst = phi + angular_error_rad
     in_q = worst < np.pi / 2  # S_iq: the step approaches k for every consistent position
     bound = np.where(
         in_q,
-        (dist - radial_error_m) * np.cos(np.minimum(worst, np.pi / 2)),  # constraint (2)
+        (dist - radial_error_m) * floats.cos(np.minimum(worst, np.pi / 2)),  # constraint (2)
         0.5 * (d_m - dist),  # constraint (1)
     )
     if min_separation_m > 0:

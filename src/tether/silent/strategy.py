@@ -9,12 +9,12 @@ break the group. Source: Kerestecioglu & Cezayirli, sections III-B and IV.
 from __future__ import annotations
 
 import importlib
-import math
 from typing import Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, Field, model_validator
 
+from tether import floats
 from tether.config import MAX_LENGTH_M, Coordinate, Scenario, finite_strict
 from tether.errors import ScenarioError
 from tether.paths.trajectory import Polyline, TimeFunction
@@ -73,12 +73,6 @@ class SilentParams(BaseModel):
         description="evaluate (1)-(2) for the worst true position within the sensor's error "
         "bounds (false: trust measurements as the paper's noise-free theorem does)",
     )
-
-
-def _norm(v: np.ndarray) -> float:
-    """``float(np.linalg.norm(v))`` of one vector, which numpy computes as
-    ``sqrt(v.dot(v))``: the same value without its call overhead (once per step)."""
-    return math.sqrt(v.dot(v))
 
 
 def _load_function(spec: str) -> TimeFunction:
@@ -307,8 +301,8 @@ class SilentStrategy(Strategy):
             search_directions=self.search_directions,
         )
         steps = self._avoid_obstacles(state.positions, steps)
-        wanted = _norm(leader_step)
-        moved = _norm(steps[leader])
+        wanted = floats.norm(leader_step)
+        moved = floats.norm(steps[leader])
         if wanted > 1e-9 and moved < 0.05 * wanted:
             self._blocked_steps += 1
         self._leader_travel_m += moved
@@ -357,7 +351,7 @@ class SilentStrategy(Strategy):
 
     def _update_done(self, leader_pos: np.ndarray, ctx: StepContext) -> None:
         if isinstance(self.trajectory, Polyline):
-            at_end = _norm(leader_pos - self.trajectory.end) <= self.goal_tolerance_m
+            at_end = floats.norm(leader_pos - self.trajectory.end) <= self.goal_tolerance_m
             self._done = bool(at_end)
 
     def done(self) -> bool:
