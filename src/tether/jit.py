@@ -45,6 +45,7 @@ KERNEL_MODULES = (
     "continuous/bookkeep_kernels.py",
     "comm_kernels.py",
     "world/clearance_kernels.py",
+    "world/clearance_cache_kernels.py",
     "world/los_kernels.py",
     "paths/astar_kernels.py",
     "graph/kernels.py",

@@ -41,7 +41,7 @@ from tether.graph.kernels import laplacian_dense_kernel
 from tether.graph.lapack_kernels import syevr_second_kernel
 from tether.graph.small import OK
 from tether.graph.small_kernels import small_fiedler_kernel
-from tether.world.clearance_kernels import segments_nearest_cached
+from tether.world.clearance_cache_kernels import segments_nearest_cached
 
 
 @njit(cache=True, inline="always")
@@ -166,7 +166,7 @@ def no_obstacles(dim: int) -> tuple:
     """
     i, f1, f2 = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, dim))
     tree = (f2, i, f2, f2, i, i, i, f2, f1)
-    table = (np.full(2, -1, np.int64), f1, f2, f2, i)
+    table = (np.full(2, -1, np.int64), f1, f2, f2, i, i, i, i, np.zeros(1, np.int64))
     return f2, tree, table, 0, (f1, i, i, np.zeros(dim), 1.0, 0.0)
 
 
@@ -178,7 +178,7 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
     """:func:`~tether.continuous.weights.compute_weights` in one call, plus ``W`` and ``L``.
 
     Pairs (:func:`pairs_in_range`), their clearance (``obstacles``: the cached search
-    :func:`~tether.world.clearance_kernels.segments_nearest_cached` on ``points``,
+    :func:`~tether.world.clearance_cache_kernels.segments_nearest_cached` on ``points``,
     ``tree``, ``table`` with ``used`` slots filled, keys ``i n + j``), the weights
     (:func:`weights_kernel`), ``W_ij`` and, with ``want_laplacian``, the dense
     Laplacian (:func:`tether.graph.kernels.laplacian_dense_kernel`). Returns those and
@@ -205,11 +205,11 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
                 b[k] = q[pairs[k, 1]]
                 keys[k] = pairs[k, 0] * n + pairs[k, 1]
             spts, perm, lo, hi, child, start, end, cen, rad = tree
-            t_keys, t_bound, t_a, t_b, t_seed = table
+            t_keys, t_bound, t_a, t_b, t_seed, t_first, t_count, pool, pool_used = table
             f_flat, f_strides, f_shape, f_origin, f_res, f_margin = field
             clear, s_star, which, added = segments_nearest_cached(
                 spts, perm, lo, hi, child, start, end, cen, rad, a, b, ro_outer, keys, slack,
-                t_keys, t_bound, t_a, t_b, t_seed,
+                t_keys, t_bound, t_a, t_b, t_seed, t_first, t_count, pool, pool_used,
                 f_flat, f_strides, f_shape, f_origin, f_res, f_margin, order,
             )  # fmt: skip
             o_star = np.zeros((m, dim))

@@ -324,10 +324,12 @@ class ObstacleIndex:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`segment_clearance` by the compiled kernel (needs numba).
 
-        With ``keys``, a hash table of bounds per key plays the part of the
-        reference's cache (:func:`~tether.world.clearance_kernels.segments_nearest_cached`),
-        and a searched segment starts from the closest point its key had last time.
+        With ``keys``, a hash table per key plays the part of the reference's cache
+        (:func:`~tether.world.clearance_cache_kernels.segments_nearest_cached`: bounds,
+        and candidate lists for the segments nearer than ``within_m``), and a searched
+        segment starts from the closest point its key had last time.
         """
+        from tether.world import clearance_cache_kernels as cc
         from tether.world import clearance_kernels as ck
 
         a = np.ascontiguousarray(a, dtype=float).reshape(-1, self.dim)
@@ -341,7 +343,7 @@ class ObstacleIndex:
         else:
             keys = np.ascontiguousarray(keys, dtype=np.int64)
             table = self._kernel_table(len(keys))
-            dist, param, which, added = ck.segments_nearest_cached(
+            dist, param, which, added = cc.segments_nearest_cached(
                 *self._kernel_tree, a, b, float(within_m), keys,
                 self.cache_slack_m, *table, *self._kernel_field, einsum_order(),
             )  # fmt: skip
@@ -357,7 +359,7 @@ class ObstacleIndex:
     def kernel_state(self, n_keys: int) -> tuple:
         """What a compiled caller passes to the cached search: points, tree, table, used, field.
 
-        For kernels that run :func:`~tether.world.clearance_kernels.segments_nearest_cached`
+        For kernels that run :func:`~tether.world.clearance_cache_kernels.segments_nearest_cached`
         themselves (it needs ``cache_slack_m`` and :func:`einsum_order` too); they
         report the slots they add with :meth:`kernel_added`.
         """
@@ -373,8 +375,15 @@ class ObstacleIndex:
         self._ktable_used = 0
         self._kernel_table(n_keys)
 
+    #: candidate-list slots of the kernel's table per key slot
+    LIST_SLOTS_PER_KEY = 16
+
     def _kernel_table(self, n_keys: int) -> tuple[np.ndarray, ...]:
-        """The kernel's cache table, emptied and enlarged when it would be over half full."""
+        """The kernel's cache table, emptied and enlarged when it would be over half full.
+
+        Keys, bounds, segment endpoints, seeds, then the candidate lists: each slot's
+        first list entry and count (-1: none), the pool of entries and its fill.
+        """
         cap = 0 if self._ktable is None else len(self._ktable[0])
         if self._ktable_used + n_keys > cap // 2:
             cap = 64
@@ -382,7 +391,10 @@ class ObstacleIndex:
                 cap *= 2
             self._ktable = (np.full(cap, -1, dtype=np.int64), np.zeros(cap),
                             np.zeros((cap, self.dim)), np.zeros((cap, self.dim)),
-                            np.full(cap, -1, dtype=np.int64))  # fmt: skip
+                            np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
+                            np.full(cap, -1, dtype=np.int64),
+                            np.zeros(self.LIST_SLOTS_PER_KEY * cap, dtype=np.int64),
+                            np.zeros(1, dtype=np.int64))  # fmt: skip
             self._ktable_used = 0
         return self._ktable
 

@@ -107,6 +107,35 @@ def build_tree(points, leaf_size):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True, inline="always")
+def point_sq(spts, e, sa, ab, den, order):  # noqa: ANN001, ANN201
+    """``(squared distance, parameter)`` from point ``spts[e]`` to the segment ``sa + s ab``.
+
+    The arithmetic of the reference search: the parameter is the einsum-ordered dot
+    product of ``spts[e] - sa`` with ``ab`` (:func:`edot`) over ``den``, clipped to
+    ``[0, 1]``; the squared distance sums the coordinates in order. (Written without a
+    scratch array: a scratch array passed in costs a reference count per call.)
+    """
+    dim = sa.shape[0]
+    t = 0.0
+    if order == 1 and dim == 3:
+        t = ((spts[e, 0] - sa[0]) * ab[0] + (spts[e, 2] - sa[2]) * ab[2]) \
+            + (spts[e, 1] - sa[1]) * ab[1]  # fmt: skip
+    else:
+        for d in range(dim):
+            t += (spts[e, d] - sa[d]) * ab[d]
+    s = t / den
+    if s < 0.0:
+        s = 0.0
+    elif s > 1.0:
+        s = 1.0
+    sq = 0.0
+    for d in range(dim):
+        x = sa[d] + s * ab[d] - spts[e, d]
+        sq += x * x
+    return sq, s
+
+
+@njit(cache=True, inline="always")
 def _node_gaps(sa, sb, ab, den, lo, hi, cen, node):  # noqa: ANN001, ANN202
     """Squared lower-bound ingredients of the distance from a segment to ``node``'s points.
 
@@ -194,7 +223,7 @@ def field_below_kernel(points, field, strides, shape, origin, res, margin, below
 
 @njit(cache=True)
 def _search(spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, reach, seed,
-            order, rel, stack, stack_g, stack_c):  # noqa: ANN001, ANN202  # fmt: skip
+            order, stack, stack_g, stack_c):  # noqa: ANN001, ANN202  # fmt: skip
     """Least clearance of one segment below ``reach``: ``(d, s, point)``, point -1 if none.
 
     ``spts`` are the points in leaf order (``spts[e] = points[perm[e]]``). Depth-first,
@@ -204,7 +233,6 @@ def _search(spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, re
     the reference does, and only for points whose squared distance does not rule them
     out; ties go to the lowest point index.
     """
-    dim = sa.shape[0]
     best, best_s, best_i, best_e = reach, 0.0, -1, -1
     stack[0] = 0
     stack_g[0] = 0.0
@@ -235,17 +263,7 @@ def _search(spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, re
             e0, e_end = start[node], end[node]
         best2 = best * best * (1.0 + 1e-12)
         for e in range(e0, e_end):
-            for d in range(dim):
-                rel[d] = spts[e, d] - sa[d]
-            s = edot(rel, ab, order) / den
-            if s < 0.0:
-                s = 0.0
-            elif s > 1.0:
-                s = 1.0
-            sq = 0.0
-            for d in range(dim):
-                x = sa[d] + s * ab[d] - spts[e, d]
-                sq += x * x
+            sq, s = point_sq(spts, e, sa, ab, den, order)
             if sq > best2:
                 continue  # sqrt(sq) > best: neither closer nor tied
             dd = math.sqrt(sq)
@@ -277,7 +295,6 @@ def segments_nearest(  # noqa: ANN201, PLR0913
     if len(spts) == 0:
         return dist, param, which
     ab = np.empty(dim)
-    rel = np.empty(dim)
     stack = np.empty(_STACK, np.int64)
     stack_g = np.empty(_STACK)
     stack_c = np.empty(_STACK)
@@ -292,86 +309,8 @@ def segments_nearest(  # noqa: ANN201, PLR0913
         den = denom if denom > 0 else 1.0
         d_k, s_k, p_k, _ = _search(
             spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, within, -1,
-            order, rel, stack, stack_g, stack_c,
+            order, stack, stack_g, stack_c,
         )  # fmt: skip
         if p_k >= 0:
             dist[k], param[k], which[k] = d_k, s_k, p_k
     return dist, param, which
-
-
-@njit(cache=True, inline="always")
-def _slot(table_keys, key):  # noqa: ANN001, ANN202
-    """Slot of ``key`` in an open-addressing table (linear probing): its own or the empty one."""
-    mask = len(table_keys) - 1
-    h = (key * 0x9E3779B97F4A7C15) & mask  # Fibonacci hashing; the table size is a power of 2
-    while table_keys[h] != -1 and table_keys[h] != key:
-        h = (h + 1) & mask
-    return h
-
-
-@njit(cache=True)
-def segments_nearest_cached(  # noqa: ANN201, PLR0913
-    spts, perm, lo, hi, child, start, end, cen, rad, a, b, within, keys, slack,
-    table_keys, table_bound, table_a, table_b, table_seed,
-    field, strides, shape, origin, res, margin, order,
-):  # noqa: ANN001  # fmt: skip
-    """:func:`segments_nearest` with a cache of bounds per segment key (same results).
-
-    The table (open addressing, keys ``-1`` = empty, at most half full) holds, per
-    key, a lower bound of the clearance of the segment ``table_a -> table_b`` and the
-    closest point found (``table_seed``, its position in ``spts``, -1 if none).
-    Clearance is 1-Lipschitz in the endpoints, so ``bound - move`` (``move``: the
-    larger endpoint displacement) bounds the new segment: at or above ``within`` it
-    is settled without a search. Otherwise the segment is checked against ``within +
-    slack`` (field, then search from the old closest point) and its entry renewed.
-    Sound whatever the keys. Returns ``dist``, ``param``, ``which`` and the number of
-    keys added to the table.
-    """
-    k_seg, dim = a.shape
-    dist = np.full(k_seg, np.inf)
-    param = np.zeros(k_seg)
-    which = np.full(k_seg, -1, np.int64)
-    added = 0
-    if len(spts) == 0:
-        return dist, param, which, added
-    ab = np.empty(dim)
-    rel = np.empty(dim)
-    stack = np.empty(_STACK, np.int64)
-    stack_g = np.empty(_STACK)
-    stack_c = np.empty(_STACK)
-    reach = within + slack
-    for k in range(k_seg):
-        sa, sb = a[k], b[k]
-        h = _slot(table_keys, keys[k])
-        seed = -1
-        if table_keys[h] == keys[k]:
-            move_a, move_b = 0.0, 0.0
-            for d in range(dim):
-                move_a += (sa[d] - table_a[h, d]) ** 2
-                move_b += (sb[d] - table_b[h, d]) ** 2
-            if table_bound[h] - math.sqrt(max(move_a, move_b)) >= within:
-                continue  # settled: the entry keeps its old segment and bound
-            seed = table_seed[h]
-        else:
-            table_keys[h] = keys[k]
-            added += 1
-        table_a[h] = sa
-        table_b[h] = sb
-        if len(field) and _field_clear(sa, sb, reach, field, strides, shape, origin, res,
-                                       margin):  # fmt: skip
-            table_bound[h] = reach
-            table_seed[h] = -1
-            continue
-        for d in range(dim):
-            ab[d] = sb[d] - sa[d]
-        denom = edot(ab, ab, order)
-        den = denom if denom > 0 else 1.0
-        d_k, s_k, p_k, e_k = _search(
-            spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, reach, seed,
-            order, rel, stack, stack_g, stack_c,
-        )  # fmt: skip
-        table_bound[h] = d_k if p_k >= 0 else reach
-        table_seed[h] = e_k
-        if p_k >= 0 and d_k < within:
-            dist[k], param[k], which[k] = d_k, s_k, p_k
-    return dist, param, which, added
