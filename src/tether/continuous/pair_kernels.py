@@ -40,11 +40,11 @@ def pairs_in_range(q, r):  # noqa: ANN001, ANN201
     Liquids*, Sec. 5.3.2.
     """
     n, dim = q.shape
-    cap = 16 * n + 16
-    out = np.empty((cap, 2), np.int64)
-    m = 0
-    diff = np.empty(dim)
     if n <= BRUTE_MAX_N:  # row_norm(diff) < r, the root taken only near r (as _pairs_dense_cells)
+        # room for every pair: an array that may be replaced inside the loop costs a
+        # reference count per pair (2-3x the loop)
+        every = np.empty((max(n * (n - 1) // 2, 1), 2), np.int64)
+        m = 0
         surely_in, surely_out = r * r * (1.0 - 1e-14), r * r * (1.0 + 1e-14)
         for i in range(n):
             for j in range(i + 1, n):
@@ -53,11 +53,13 @@ def pairs_in_range(q, r):  # noqa: ANN001, ANN201
                     x = q[i, d] - q[j, d]
                     acc += x * x
                 if acc < surely_in or (acc <= surely_out and math.sqrt(acc) < r):
-                    if m == len(out):
-                        out = _grow(out)
-                    out[m, 0], out[m, 1] = i, j
+                    every[m, 0], every[m, 1] = i, j
                     m += 1
-        return out[:m].copy()
+        return every[:m].copy()
+    cap = 16 * n + 16
+    out = np.empty((cap, 2), np.int64)
+    m = 0
+    diff = np.empty(dim)
     lo = np.empty(dim)
     for d in range(dim):
         lo[d] = q[:, d].min()

@@ -75,8 +75,17 @@ def pairs_within_kernel(q, r):  # noqa: ANN001, ANN201
     """
     n, dim = q.shape
     r2 = r * r
-    cap = 8 * n + 8
-    out = np.empty((cap, 2), np.int64)
+    # two passes, count then fill: an output array that may be replaced inside the loop
+    # costs a reference count per pair (2-3x the loop)
+    m = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            sq = 0.0
+            for d in range(dim):
+                x = q[i, d] - q[j, d]
+                sq += x * x
+            m += sq <= r2
+    out = np.empty((m, 2), np.int64)
     m = 0
     for i in range(n):
         for j in range(i + 1, n):
@@ -85,13 +94,9 @@ def pairs_within_kernel(q, r):  # noqa: ANN001, ANN201
                 x = q[i, d] - q[j, d]
                 sq += x * x
             if sq <= r2:
-                if m == len(out):
-                    bigger = np.empty((2 * len(out), 2), np.int64)
-                    bigger[:m] = out
-                    out = bigger
                 out[m, 0], out[m, 1] = i, j
                 m += 1
-    return out[:m].copy()
+    return out
 
 
 @njit(cache=True)

@@ -93,6 +93,12 @@ class OccupancyGrid:
         return out
 
     @cached_property
+    def any_occupied(self) -> bool:
+        """Some cell is occupied (computed once: a grid is not changed after it is made,
+        as :attr:`distance_field_m` assumes too)."""
+        return bool(self.occupied.any())
+
+    @cached_property
     def distance_field_m(self) -> np.ndarray:
         """Euclidean distance (m) from each free cell centre to the nearest occupied cell.
 

@@ -55,7 +55,7 @@ class World:
 
     @property
     def has_obstacles(self) -> bool:
-        return self.grid is not None and bool(self.grid.occupied.any())
+        return self.grid is not None and self.grid.any_occupied
 
     def in_bounds(self, points: np.ndarray) -> np.ndarray:
         points = np.atleast_2d(points)
