@@ -44,7 +44,12 @@ def table(index: ObstacleIndex, pool: int | None = None) -> tuple[np.ndarray, ..
     index.kernel_grow(64)
     t = index._kernel_table(64)
     if pool is not None:
-        t = (*t[:7], np.zeros(pool, dtype=np.int64), np.zeros(1, dtype=np.int64))
+        t = (
+            *t[:7],
+            np.zeros(pool, dtype=np.int64),
+            np.zeros((pool, index.dim)),
+            np.zeros(1, dtype=np.int64),
+        )
     return t
 
 

@@ -382,7 +382,8 @@ class ObstacleIndex:
         """The kernel's cache table, emptied and enlarged when it would be over half full.
 
         Keys, bounds, segment endpoints, seeds, then the candidate lists: each slot's
-        first list entry and count (-1: none), the pool of entries and its fill.
+        first list entry and count (-1: none), the pool of entries, their coordinates and
+        the pool's fill.
         """
         cap = 0 if self._ktable is None else len(self._ktable[0])
         if self._ktable_used + n_keys > cap // 2:
@@ -394,6 +395,7 @@ class ObstacleIndex:
                             np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
                             np.full(cap, -1, dtype=np.int64),
                             np.zeros(self.LIST_SLOTS_PER_KEY * cap, dtype=np.int64),
+                            np.zeros((self.LIST_SLOTS_PER_KEY * cap, self.dim)),
                             np.zeros(1, dtype=np.int64))  # fmt: skip
             self._ktable_used = 0
         return self._ktable

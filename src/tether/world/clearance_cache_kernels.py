@@ -44,9 +44,14 @@ _LIST_REL = 1e-9
 
 @njit(cache=True, inline="always")
 def _slot(table_keys, key):  # noqa: ANN001, ANN202
-    """Slot of ``key`` in an open-addressing table (linear probing): its own or the empty one."""
+    """Slot of ``key`` in an open-addressing table (linear probing): its own or the empty one.
+
+    A key below the table size starts at its own slot (a small team's pair codes ``i n +
+    j`` then sit in order, next to each other); others by Fibonacci hashing (the table
+    size is a power of 2).
+    """
     mask = len(table_keys) - 1
-    h = (key * 0x9E3779B97F4A7C15) & mask  # Fibonacci hashing; the table size is a power of 2
+    h = key if 0 <= key <= mask else (key * 0x9E3779B97F4A7C15) & mask
     while table_keys[h] != -1 and table_keys[h] != key:
         h = (h + 1) & mask
     return h
@@ -54,9 +59,10 @@ def _slot(table_keys, key):  # noqa: ANN001, ANN202
 
 @njit(cache=True)
 def _collect(spts, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, radius, order, stack,
-             pool, first):  # noqa: ANN001, ANN202  # fmt: skip
+             pool, pool_x, first):  # noqa: ANN001, ANN202  # fmt: skip
     """Write into ``pool[first:]`` the positions (in ``spts``) of every point within
-    ``radius`` of the segment; return how many, or -1 if ``pool`` is too short.
+    ``radius`` of the segment, and into ``pool_x[first:]`` its coordinates (a list is
+    then scanned as one block of memory); return how many, or -1 if the pool is too short.
 
     The tree's boxes are pruned by the bounds of :func:`~tether.world.clearance_kernels._node_gaps`
     with the same relative margin as the search, so no point within ``radius`` is missed.
@@ -83,21 +89,22 @@ def _collect(spts, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, radius,
                 if first + count >= len(pool):
                     return -1
                 pool[first + count] = e
+                pool_x[first + count] = spts[e]
                 count += 1
     return count
 
 
 @njit(cache=True)
-def _scan(spts, perm, pool, first, count, sa, ab, den, reach, order):  # noqa: ANN001, ANN202
+def _scan(perm, pool, pool_x, first, count, sa, ab, den, reach, order):  # noqa: ANN001, ANN202
     """``_search``'s answer over the listed points only: ``(d, s, point, position)``."""
     best, best_s, best_i, best_e = reach, 0.0, -1, -1
     best2 = best * best * (1.0 + 1e-12)
     for k in range(first, first + count):
-        e = pool[k]
-        sq, s = point_sq(spts, e, sa, ab, den, order)
+        sq, s = point_sq(pool_x, k, sa, ab, den, order)  # pool_x[k] is spts[pool[k]]
         if sq > best2:
             continue  # sqrt(sq) > best: neither closer nor tied
         dd = math.sqrt(sq)
+        e = pool[k]
         p = perm[e]
         if dd < best or (best_i >= 0 and dd == best and p < best_i):
             best, best_s, best_i, best_e = dd, s, p, e
@@ -117,7 +124,7 @@ def _drop_lists(table_count, pool_used):  # noqa: ANN001, ANN202
 def segments_nearest_cached(  # noqa: ANN201, PLR0913
     spts, perm, lo, hi, child, start, end, cen, rad, a, b, within, keys, slack,
     table_keys, table_bound, table_a, table_b, table_seed, table_first, table_count, pool,
-    pool_used, field, strides, shape, origin, res, margin, order,
+    pool_x, pool_used, field, strides, shape, origin, res, margin, order,
 ):  # noqa: ANN001  # fmt: skip
     """:func:`~tether.world.clearance_kernels.segments_nearest` with a cache per segment key
     (same results).
@@ -126,8 +133,9 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
     key, the segment ``table_a -> table_b`` last searched, a lower bound of its
     clearance, the closest point found (``table_seed``, its position in ``spts``, -1 if
     none) and, for a segment nearer than ``within``, its candidate list
-    (``pool[table_first:table_first + table_count]``; ``table_count = -1``: none;
-    ``pool_used[0]`` slots of ``pool`` are taken). A segment whose ``bound - move`` is
+    (``pool[table_first:table_first + table_count]``, the points' coordinates in the same
+    rows of ``pool_x``; ``table_count = -1``: none; ``pool_used[0]`` slots are taken; an
+    empty pool: no lists). A segment whose ``bound - move`` is
     at or above ``within`` is settled; one with a list and ``move <= slack`` is scanned
     over its list; any other is checked against ``within + slack`` (field, then the
     tree search from the old closest point), its entry renewed and, if nearer than
@@ -163,8 +171,8 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
             if table_bound[h] - move >= within:
                 continue  # settled: the entry keeps its old segment and bound
             if table_count[h] >= 0 and move <= slack:  # the list still holds the answer
-                d_k, s_k, p_k, e_k = _scan(spts, perm, pool, table_first[h], table_count[h],
-                                           sa, ab, den, reach, order)  # fmt: skip
+                d_k, s_k, p_k, e_k = _scan(perm, pool, pool_x, table_first[h],
+                                           table_count[h], sa, ab, den, reach, order)  # fmt: skip
                 if p_k >= 0:
                     table_seed[h] = e_k  # only ever a seed for the pruning
                     if d_k < within:
@@ -190,13 +198,15 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
         table_seed[h] = e_k
         if p_k >= 0 and d_k < within:
             dist[k], param[k], which[k] = d_k, s_k, p_k
+            if len(pool) == 0:
+                continue  # no pool: no lists
             radius = (d_k + 2.0 * slack) * (1.0 + _LIST_REL) + _LIST_REL
             got = _collect(spts, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, radius,
-                           order, stack, pool, pool_used[0])  # fmt: skip
+                           order, stack, pool, pool_x, pool_used[0])  # fmt: skip
             if got < 0:  # the pool is full: start it again (lists are only a shortcut)
                 _drop_lists(table_count, pool_used)
                 got = _collect(spts, lo, hi, child, start, end, cen, rad, sa, sb, ab, den,
-                               radius, order, stack, pool, 0)  # fmt: skip
+                               radius, order, stack, pool, pool_x, 0)  # fmt: skip
             if got >= 0:
                 table_first[h] = pool_used[0]
                 table_count[h] = got
