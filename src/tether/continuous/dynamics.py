@@ -85,9 +85,23 @@ class IntegratorParams:
 def semi_implicit_euler(
     q: np.ndarray, v: np.ndarray, force: np.ndarray, h: float, mass: float, damping: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One step of eq. (1): ``v+ = (m v + h f) / (m + h b)``, ``q+ = q + h v+``."""
+    """One step of eq. (1): ``v+ = (m v + h f) / (m + h b)``, ``q+ = q + h v+``.
+
+    For ``(n, dim)`` team arrays with the kernels on (:func:`tether.jit.enabled`), the
+    same arithmetic compiled (:func:`tether.continuous.force_kernels.euler_kernel`).
+    """
+    if q.ndim == 2 and jit.enabled():
+        from tether.continuous.force_kernels import euler_kernel
+
+        return euler_kernel(np.ascontiguousarray(q, dtype=float),
+                            np.ascontiguousarray(v, dtype=float),
+                            np.ascontiguousarray(force, dtype=float), float(h), float(mass),
+                            float(damping), _NO_BOX, 0.0)  # fmt: skip
     v_new = (mass * v + h * force) / (mass + h * damping)
     return q + h * v_new, v_new
+
+
+_NO_BOX = np.zeros((0, 3))  # euler_kernel's box for none (one row per corner)
 
 
 def stay_inside(
