@@ -56,6 +56,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -91,9 +92,7 @@ def semi_implicit_euler(
     same arithmetic compiled (:func:`tether.continuous.force_kernels.euler_kernel`).
     """
     if q.ndim == 2 and jit.enabled():
-        from tether.continuous.force_kernels import euler_kernel
-
-        return euler_kernel(np.ascontiguousarray(q, dtype=float),
+        return _euler_kernel()(np.ascontiguousarray(q, dtype=float),
                             np.ascontiguousarray(v, dtype=float),
                             np.ascontiguousarray(force, dtype=float), float(h), float(mass),
                             float(damping), _NO_BOX, 0.0)  # fmt: skip
@@ -102,6 +101,15 @@ def semi_implicit_euler(
 
 
 _NO_BOX = np.zeros((0, 3))  # euler_kernel's box for none (one row per corner)
+
+
+@cache
+def _euler_kernel() -> Callable:
+    """:func:`tether.continuous.force_kernels.euler_kernel`, imported on first use (it loads
+    numba; an import statement per call costs microseconds)."""
+    from tether.continuous.force_kernels import euler_kernel
+
+    return euler_kernel
 
 
 def stay_inside(

@@ -40,7 +40,7 @@ from tether.graph.warm import WarmState
 from tether.world.clearance import ObstacleIndex, einsum_order
 
 
-@dataclass
+@dataclass(slots=True)
 class WeightedGraph:
     """Weights of App. A with everything the gradient needs (arrays over pairs).
 
@@ -235,15 +235,6 @@ def _kernels() -> tuple:
     return evaluate_kernel, evaluate_fiedler_kernel, no_obstacles
 
 
-@cache
-def _kernel_params(params: ConnectivityParams) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """The radii and the potential's constants as the kernels take them (per parameter set:
-    the parameters are frozen)."""
-    radii = (params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
-             params.rc_outer_m)  # fmt: skip
-    return radii, (params.lambda2_min, params.lambda2_null, params.potential_gain)
-
-
 def _evaluate_kernel(
     q: np.ndarray,
     params: ConnectivityParams,
@@ -260,11 +251,13 @@ def _evaluate_kernel(
     has = obstacles is not None and obstacles.tree is not None and n > 1
     estimate = min(n * (n - 1) // 2, 32 * n)
     slack = obstacles.cache_slack_m if has else 0.0
-    radii, potential = _kernel_params(params)
+    radii = (params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
+             params.rc_outer_m)  # fmt: skip
     fused = (guess is not None and DENSE_MAX_N < n <= SUBSET_MAX_N and len(guess) == n
              and method in ("auto", "lapack"))  # fmt: skip
     if fused:
         guess_c = np.ascontiguousarray(guess, dtype=float)
+        potential = (params.lambda2_min, params.lambda2_null, params.potential_gain)
         lwork, liwork = _syevr_lwork(n)
     eigen = None
     for _ in range(2):
