@@ -189,6 +189,11 @@ class ExplorationSim:
         self.goal_at_failure = np.full((n, 2), np.nan)  # the goal it was heading to
         self.moved = np.zeros(n, dtype=bool)  # advanced along its path in the last step
         self.knowledge = Knowledge(self.shape, n)
+        # explored_fraction() of the BS map version it was counted for
+        self._explored: tuple[int, float] = (-1, 0.0)
+        # the last link pairs and their components' labels (a step that changes no
+        # link has the same components)
+        self._components: tuple[np.ndarray, np.ndarray] | None = None
         self.connected = np.ones(n, dtype=bool)
         self.groups: list[list[int]] = [list(range(n))]
         self.t = 0
@@ -325,7 +330,12 @@ class ExplorationSim:
         if not self.alive.all():  # failed robots have no link
             dead = np.flatnonzero(~self.alive) + 1
             pairs = pairs[~np.isin(pairs, dead).any(axis=1)]
-        _, lab = components(len(nodes), pairs)
+        last = self._components
+        if last is not None and np.array_equal(last[0], pairs):
+            lab = last[1]
+        else:
+            _, lab = components(len(nodes), pairs)
+            self._components = (pairs, lab)
         self.connected = lab[1:] == lab[0]
         groups: dict[int, list[int]] = {}
         for r in range(self.n):
@@ -338,9 +348,17 @@ class ExplorationSim:
         self.delivered |= self.connected & self.at_goal & self.scanned
 
     def explored_fraction(self) -> float:
-        """Share of the reachable free area known at the BS."""
-        known = self.knowledge.global_known
-        return np.count_nonzero(known & self.free_region) / self.free_total
+        """Share of the reachable free area known at the BS.
+
+        Counted once per version of the BS map (``Knowledge.global_version``, bumped
+        whenever it grows).
+        """
+        version = self.knowledge.global_version
+        if self._explored[0] != version:
+            known = self.knowledge.global_known
+            share = np.count_nonzero(known & self.free_region) / self.free_total
+            self._explored = (version, share)
+        return self._explored[1]
 
     def step(self) -> None:
         """Advance by one step: move, sense, communicate, then the policy decides."""
