@@ -269,11 +269,9 @@ class GraphBuilder:
     def _edges(self, known: np.ndarray, keys_: np.ndarray, positions: np.ndarray) -> np.ndarray:
         # keys_ are coarse *cell* keys (stable while the known map grows; node ids are not)
         nodes = keys_
-        i, j = np.triu_indices(len(nodes), k=1)
+        i, j = pairs_in_range(positions, self.link_model.range_cells)
         if len(i) == 0:
             return np.empty((0, 2), dtype=np.intp)
-        close = np.linalg.norm(positions[i] - positions[j], axis=1) <= self.link_model.range_cells
-        i, j = i[close], j[close]
         lo = np.minimum(nodes[i], nodes[j]).astype(np.int64)
         hi = np.maximum(nodes[i], nodes[j]).astype(np.int64)
         keys = lo * PAIR_BASE + hi
@@ -291,6 +289,19 @@ class GraphBuilder:
                 hard = never(known & self.occupied, positions[i[rest]], positions[j[rest]])
                 self._blocked.add(keys[rest[hard]])
         return np.stack([i[linked], j[linked]], axis=1)
+
+
+def pairs_in_range(positions: np.ndarray, range_cells: float) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex pairs ``i < j`` with ``norm(positions[i] - positions[j]) <= range_cells``.
+
+    In the order of ``np.triu_indices`` (row by row) and with the same distances
+    (``sqrt(dx * dx + dy * dy)``, as ``np.linalg.norm`` sums the squares), from one
+    ``(V, V)`` matrix instead of a gather per pair.
+    """
+    dx = positions[:, 0][:, None] - positions[:, 0][None, :]
+    dy = positions[:, 1][:, None] - positions[:, 1][None, :]
+    close = np.sqrt(dx * dx + dy * dy) <= range_cells
+    return np.nonzero(np.triu(close, 1))
 
 
 #: a pair of coarse cell keys ``lo < hi`` is cached as ``lo * PAIR_BASE + hi``
