@@ -79,8 +79,12 @@ def relay_paths(
         Target robot -> robots on ``P_f`` from ``f`` to the BS (the target
         first), or ``None`` if no such path forms.
     """
+    # every search stays on the goals and the BS: only the edges between them matter
+    # (in their order, so each vertex scans its neighbours as in the whole graph)
+    edges = np.asarray(edges, dtype=int).reshape(-1, 2)
+    edges = edges[np.isin(edges, [base, *goals.values()]).all(axis=1)]
     adj: dict[int, list[int]] = {}
-    for a, b in np.asarray(edges, dtype=int).reshape(-1, 2).tolist():
+    for a, b in edges.tolist():
         adj.setdefault(a, []).append(b)
         adj.setdefault(b, []).append(a)
     owner = {v: r for r, v in goals.items()}
