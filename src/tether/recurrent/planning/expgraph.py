@@ -67,6 +67,15 @@ class ExplorationGraph:
         hit = np.flatnonzero(self.nodes == node)
         return int(hit[0]) if len(hit) else -1
 
+    def vertices_of_nodes(self, nodes: np.ndarray) -> np.ndarray:
+        """:meth:`vertex_of_node` of each node of ``nodes`` (vertices sit on distinct nodes)."""
+        nodes = np.asarray(nodes, dtype=np.intp)
+        if self.n == 0:
+            return np.full(len(nodes), -1, dtype=np.intp)
+        order = np.argsort(self.nodes, kind="stable")
+        at = np.minimum(np.searchsorted(self.nodes[order], nodes), self.n - 1)
+        return np.where(self.nodes[order][at] == nodes, order[at], -1)
+
     def geodesic(self, points: np.ndarray) -> np.ndarray:
         """Geodesic distance estimates (cells) from each point to every vertex, ``(k, V)``."""
         src = self.coarse.node_at(points)
