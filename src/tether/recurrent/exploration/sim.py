@@ -191,9 +191,6 @@ class ExplorationSim:
         self.knowledge = Knowledge(self.shape, n)
         # explored_fraction() of the BS map version it was counted for
         self._explored: tuple[int, float] = (-1, 0.0)
-        # the last link pairs and their components' labels (a step that changes no
-        # link has the same components)
-        self._components: tuple[np.ndarray, np.ndarray] | None = None
         self.connected = np.ones(n, dtype=bool)
         self.groups: list[list[int]] = [list(range(n))]
         self.t = 0
@@ -330,12 +327,7 @@ class ExplorationSim:
         if not self.alive.all():  # failed robots have no link
             dead = np.flatnonzero(~self.alive) + 1
             pairs = pairs[~np.isin(pairs, dead).any(axis=1)]
-        last = self._components
-        if last is not None and np.array_equal(last[0], pairs):
-            lab = last[1]
-        else:
-            _, lab = components(len(nodes), pairs)
-            self._components = (pairs, lab)
+        _, lab = components(len(nodes), pairs)
         self.connected = lab[1:] == lab[0]
         groups: dict[int, list[int]] = {}
         for r in range(self.n):
