@@ -20,23 +20,32 @@ from tether.recurrent.planning.apx import LazySteiner
 from tether.recurrent.planning.steiner import steiner_tree
 
 
-@pytest.mark.parametrize("unit_graph", [False, True])
-@pytest.mark.parametrize("seed", range(10))
-def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int, unit_graph: bool) -> None:
-    rng = np.random.default_rng(100 + seed)
-    g = nx.connected_watts_strogatz_graph(int(rng.integers(12, 22)), 4, 0.3, seed=seed)
-    frontiers = [int(v) for v in rng.choice(np.arange(1, len(g)), size=7, replace=False)]
-    budget = int(rng.integers(3, 8))
+def _instance(
+    rng: np.random.Generator, seed: int, sizes: tuple[int, int], n_frontiers: int, budgets: tuple
+) -> tuple[_problem.Problem, np.ndarray, int, nx.Graph]:
+    """A small-world graph's reduced problem, its frontiers within the budget, the
+    budget, and the reduced graph (labels) for exact Steiner trees."""
+    g = nx.connected_watts_strogatz_graph(int(rng.integers(*sizes)), 4, 0.3, seed=seed)
+    frontiers = [int(v) for v in rng.choice(np.arange(1, len(g)), size=n_frontiers, replace=False)]
+    budget = int(rng.integers(*budgets))
     prob = _problem.build(g, 0, dict.fromkeys(frontiers, 1.0), budget)
     fr = prob.frontiers[prob.dist[0, prob.frontiers] <= budget]
-    delta = int(rng.integers(2, 5))
-    lazy = LazySteiner(prob.dist, fr, budget, delta, unit_graph=unit_graph)
-    assert (lazy.graph is not None) == unit_graph  # budget >= 3: the graph search is used
     sub = nx.Graph()
     sub.add_edges_from(
         (prob.labels[a], prob.labels[b]) for a, b in zip(*prob.adj.nonzero(), strict=True)
     )
     sub.add_node(0)
+    return prob, fr, budget, sub
+
+
+@pytest.mark.parametrize("unit_graph", [False, True])
+@pytest.mark.parametrize("seed", range(10))
+def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int, unit_graph: bool) -> None:
+    rng = np.random.default_rng(100 + seed)
+    prob, fr, budget, sub = _instance(rng, seed, (12, 22), 7, (3, 8))
+    delta = int(rng.integers(2, 5))
+    lazy = LazySteiner(prob.dist, fr, budget, delta, unit_graph=unit_graph)
+    assert (lazy.graph is not None) == unit_graph  # budget >= 3: the graph search is used
     asks = [
         np.array(c)
         for s in range(1, min(delta, len(fr)) + 1)
@@ -141,17 +150,9 @@ def test_pair_filter_is_exactly_pair_feasibility(seed: int) -> None:
     would drop feasible subsets).
     """
     rng = np.random.default_rng(700 + seed)
-    g = nx.connected_watts_strogatz_graph(int(rng.integers(14, 26)), 4, 0.3, seed=seed)
-    frontiers = [int(v) for v in rng.choice(np.arange(1, len(g)), size=8, replace=False)]
-    budget = int(rng.integers(3, 7))
-    prob = _problem.build(g, 0, dict.fromkeys(frontiers, 1.0), budget)
-    fr = prob.frontiers[prob.dist[0, prob.frontiers] <= budget]
+    prob, fr, budget, sub = _instance(rng, seed, (14, 26), 8, (3, 7))
     lazy = LazySteiner(prob.dist, fr, budget, 4, unit_graph=bool(seed % 2))
     assert lazy.pair_ok is not None and lazy.pair_ok.shape == (len(fr), len(fr))
-    sub = nx.Graph()
-    sub.add_edges_from(
-        (prob.labels[a], prob.labels[b]) for a, b in zip(*prob.adj.nonzero(), strict=True)
-    )
     for i, j in itertools.combinations(range(len(fr)), 2):
         terms = [prob.labels[int(fr[i])], prob.labels[int(fr[j])], 0]
         try:

@@ -51,6 +51,16 @@ def _bfs_path(adj: dict[int, list[int]], allowed: set[int], src: int, dst: int) 
     return None
 
 
+def _edges_between(edges: np.ndarray, vertices: list[int]) -> np.ndarray:
+    """The edges with both ends in ``vertices``, in their order.
+
+    Every search of :func:`relay_paths` stays on the goals and the BS, so only those
+    edges matter; kept in order, each vertex scans its neighbours as in the whole graph.
+    """
+    edges = np.asarray(edges, dtype=int).reshape(-1, 2)
+    return edges[np.isin(edges, vertices).all(axis=1)]
+
+
 def relay_paths(
     goals: dict[int, int],
     travel_times: dict[int, float],
@@ -79,12 +89,8 @@ def relay_paths(
         Target robot -> robots on ``P_f`` from ``f`` to the BS (the target
         first), or ``None`` if no such path forms.
     """
-    # every search stays on the goals and the BS: only the edges between them matter
-    # (in their order, so each vertex scans its neighbours as in the whole graph)
-    edges = np.asarray(edges, dtype=int).reshape(-1, 2)
-    edges = edges[np.isin(edges, [base, *goals.values()]).all(axis=1)]
     adj: dict[int, list[int]] = {}
-    for a, b in edges.tolist():
+    for a, b in _edges_between(edges, [base, *goals.values()]).tolist():
         adj.setdefault(a, []).append(b)
         adj.setdefault(b, []).append(a)
     owner = {v: r for r, v in goals.items()}
