@@ -172,3 +172,22 @@ except ValueError as exc:
         "clash: strategy 'silent' is already registered by "
         "tether.silent.strategy.SilentStrategy" in out
     )
+
+
+def test_a_builtin_name_taken_before_the_builtins_are_provided_still_clashes() -> None:
+    """Registering ``silent`` before ``tether.runner`` is imported fails at that import,
+    as it did when the runner imported every built-in module."""
+    code = """
+from tether.registry import STRATEGIES
+
+@STRATEGIES.register("silent")
+class Silent:
+    pass
+
+try:
+    import tether.runner
+except ValueError as exc:
+    print("clash:", exc)
+"""
+    out = _python(code)
+    assert "clash: strategy 'silent' is already registered by __main__.Silent" in out

@@ -73,10 +73,14 @@ class Registry(Generic[T]):
             The registered name.
         module
             The dotted name of the module that defines and registers it (its objects'
-            ``__module__``).
+            ``__module__``). If another module registered ``name`` already, this one is
+            imported now, so the clash is reported as it would be without laziness.
         """
-        if name not in self._items:
+        old = self._items.get(name)
+        if old is None:
             self._providers[name] = module
+        elif getattr(old, "__module__", None) != module:
+            importlib.import_module(module)  # its registration reports the clash
 
     def _load(self, name: str) -> None:
         """Import the module that provides ``name``."""
