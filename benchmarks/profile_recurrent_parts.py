@@ -4,11 +4,14 @@
 
 Each listed function is replaced by a wrapper that adds its ``time.process_time`` to a
 total (nested parts count in their callers too); then the scenario runs once without
-figures. Used for the ``recurrent_grass`` profile in docs/performance.md.
+figures. The garbage collector's passes are timed too (``gc.callbacks``): they count in
+whichever part allocates when one starts. Used for the ``recurrent_grass`` profile in
+docs/performance.md.
 """
 
 import collections
 import functools
+import gc
 import importlib
 import sys
 import tempfile
@@ -17,6 +20,15 @@ from pathlib import Path
 
 T = collections.defaultdict(float)
 N = collections.Counter()
+GC = {"start": 0.0, "total": 0.0, "passes": 0}
+
+
+def _gc_timer(phase, info):
+    if phase == "start":
+        GC["start"] = time.process_time()
+    else:
+        GC["total"] += time.process_time() - GC["start"]
+        GC["passes"] += 1
 
 
 def wrap(modname, qual):
@@ -83,9 +95,13 @@ for m, q in targets:
     except Exception as e:
         print("skip", m, q, e)
 t1 = time.process_time()
+gc.callbacks.append(_gc_timer)
 with tempfile.TemporaryDirectory() as tmp:
     out = run(sys.argv[1], out_dir=Path(tmp) / "r", figures=False)
 t2 = time.process_time()
+gc.callbacks.remove(_gc_timer)
 print(f"imports {t1 - t0:.2f} s, run {t2 - t1:.2f} s")
 for _m, q in targets:
     print(f"{q:45s} {T[q]:7.2f} s  {N[q]:6d} calls")
+gc_part = "garbage collector (in the parts above)"
+print(f"{gc_part:45s} {GC['total']:7.2f} s  {GC['passes']:6d} passes")

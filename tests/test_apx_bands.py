@@ -1,6 +1,6 @@
 """APX's subset bands (genNewSubset) against one global sort of every subset.
 
-:func:`tether.recurrent.planning.apx._bands` makes the subsets of at most ``delta``
+:func:`tether.recurrent.planning.apx_bands.bands` makes the subsets of at most ``delta``
 frontiers band by band of utility so that Algorithm 1 (Banfi et al., Sec. V) can stop
 early; the band widths are a matter of speed only (issue 14), so the bands joined must
 be exactly the global order: decreasing utility, increasing size, increasing colex rank.
@@ -13,14 +13,18 @@ import itertools
 import numpy as np
 import pytest
 
-from tether.recurrent.planning import apx
+from tether.recurrent.planning import apx, apx_bands
 
 
-def global_order(uf: np.ndarray, delta: int) -> list[tuple[int, ...]]:
+def global_order(
+    uf: np.ndarray, delta: int, fits: np.ndarray | None = None
+) -> list[tuple[int, ...]]:
     ranker = apx._Ranker(len(uf), delta)
     rows = []
     for s in range(1, delta + 1):
         for c in itertools.combinations(range(len(uf)), s):
+            if fits is not None and not all(fits[i, j] for i, j in itertools.combinations(c, 2)):
+                continue
             util = float(uf[list(c)].sum())
             rows.append((-util, s, int(ranker.rank(np.array([c]))[0]), c))
     return [r[3] for r in sorted(rows)]
@@ -41,14 +45,18 @@ def test_bands_joined_are_the_global_order(seed: int, ratio: float, cap: int, mo
         uf = np.sort(uf)[::-1]
     if seed % 4 == 1:
         uf[0] *= 500.0  # one frontier far above the rest (the first band's width)
-    monkeypatch.setattr(apx, "LOWEST_BAND_RATIO", ratio)
-    monkeypatch.setattr(apx, "BAND_SUBSETS", cap)
+    monkeypatch.setattr(apx_bands, "LOWEST_BAND_RATIO", ratio)
+    monkeypatch.setattr(apx_bands, "BAND_SUBSETS", cap)
+    fits = None
+    if seed % 2:  # only subsets whose every pair fits (APX's pair filter)
+        fits = rng.random((k, k)) < 0.6
+        fits = fits & fits.T
     got, lows = [], []
-    for util, size, combos, lo in apx._bands(uf, delta, apx._Ranker(k, delta)):
+    for util, size, combos, lo in apx_bands.bands(uf, delta, apx._Ranker(k, delta).rank, fits):
         got.extend(tuple(int(x) for x in row[:s]) for row, s in zip(combos, size, strict=True))
         assert all(u > lo for u in util)
         lows.append((len(got), lo))
-    assert got == global_order(uf, delta)
+    assert got == global_order(uf, delta, fits)
     utils = [float(uf[list(c)].sum()) for c in got]
     for n_before, lo in lows:
         assert all(u <= lo for u in utils[n_before:])

@@ -20,23 +20,32 @@ from tether.recurrent.planning.apx import LazySteiner
 from tether.recurrent.planning.steiner import steiner_tree
 
 
-@pytest.mark.parametrize("unit_graph", [False, True])
-@pytest.mark.parametrize("seed", range(10))
-def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int, unit_graph: bool) -> None:
-    rng = np.random.default_rng(100 + seed)
-    g = nx.connected_watts_strogatz_graph(int(rng.integers(12, 22)), 4, 0.3, seed=seed)
-    frontiers = [int(v) for v in rng.choice(np.arange(1, len(g)), size=7, replace=False)]
-    budget = int(rng.integers(3, 8))
+def _instance(
+    rng: np.random.Generator, seed: int, sizes: tuple[int, int], n_frontiers: int, budgets: tuple
+) -> tuple[_problem.Problem, np.ndarray, int, nx.Graph]:
+    """A small-world graph's reduced problem, its frontiers within the budget, the
+    budget, and the reduced graph (labels) for exact Steiner trees."""
+    g = nx.connected_watts_strogatz_graph(int(rng.integers(*sizes)), 4, 0.3, seed=seed)
+    frontiers = [int(v) for v in rng.choice(np.arange(1, len(g)), size=n_frontiers, replace=False)]
+    budget = int(rng.integers(*budgets))
     prob = _problem.build(g, 0, dict.fromkeys(frontiers, 1.0), budget)
     fr = prob.frontiers[prob.dist[0, prob.frontiers] <= budget]
-    delta = int(rng.integers(2, 5))
-    lazy = LazySteiner(prob.dist, fr, budget, delta, unit_graph=unit_graph)
-    assert (lazy.graph is not None) == unit_graph  # budget >= 3: the graph search is used
     sub = nx.Graph()
     sub.add_edges_from(
         (prob.labels[a], prob.labels[b]) for a, b in zip(*prob.adj.nonzero(), strict=True)
     )
     sub.add_node(0)
+    return prob, fr, budget, sub
+
+
+@pytest.mark.parametrize("unit_graph", [False, True])
+@pytest.mark.parametrize("seed", range(10))
+def test_lazy_costs_equal_exact_steiner_in_any_order(seed: int, unit_graph: bool) -> None:
+    rng = np.random.default_rng(100 + seed)
+    prob, fr, budget, sub = _instance(rng, seed, (12, 22), 7, (3, 8))
+    delta = int(rng.integers(2, 5))
+    lazy = LazySteiner(prob.dist, fr, budget, delta, unit_graph=unit_graph)
+    assert (lazy.graph is not None) == unit_graph  # budget >= 3: the graph search is used
     asks = [
         np.array(c)
         for s in range(1, min(delta, len(fr)) + 1)
@@ -130,3 +139,55 @@ def test_relax_graph_kernel_matches_numpy(seed: int) -> None:
         with jit.using(True):
             got = _relax(g, d, cap, lazy.graph)
         assert got.dtype == want.dtype and np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_pair_filter_is_exactly_pair_feasibility(seed: int) -> None:
+    """``pair_ok[i, j]``: the Steiner tree of ``{b, f_i, f_j}`` fits the budget.
+
+    Against networkx's exact tree per pair; catches the E rows read at frontier
+    positions instead of their vertices, or a filter stricter than feasibility (it
+    would drop feasible subsets).
+    """
+    rng = np.random.default_rng(700 + seed)
+    prob, fr, budget, sub = _instance(rng, seed, (14, 26), 8, (3, 7))
+    lazy = LazySteiner(prob.dist, fr, budget, 4, unit_graph=bool(seed % 2))
+    assert lazy.pair_ok is not None and lazy.pair_ok.shape == (len(fr), len(fr))
+    for i, j in itertools.combinations(range(len(fr)), 2):
+        terms = [prob.labels[int(fr[i])], prob.labels[int(fr[j])], 0]
+        try:
+            fits = steiner_tree(sub, terms).cost <= budget
+        except nx.NetworkXNoPath:
+            fits = False
+        assert lazy.pair_ok[i, j] == lazy.pair_ok[j, i] == fits, (i, j)
+    assert LazySteiner(prob.dist, fr, budget, 4, pair_filter=False).pair_ok is None
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_apx_with_and_without_the_pair_filter_agree(seed: int) -> None:
+    """Algorithm 1's result does not depend on the pair filter (the reference: off).
+
+    Exploration-shaped instances (many frontiers, budgets 3-8, some robots busy);
+    every field but the work counter, and the configuration ``optimal_configuration``
+    returns. Catches a filter that drops a feasible subset or reorders the others.
+    """
+    from tether.recurrent.planning.apx import solve_apx
+    from tether.recurrent.planning.synthetic import exploration_instance
+
+    inst = exploration_instance(seed, n_frontiers=40, n_busy=seed % 3)
+    for budget in (3, 4, 6, 8):
+        args = (inst.graph, inst.base, inst.utilities, budget, list(inst.goals.values()))
+        prob = _problem.build(*args)
+        for delta in (3, 4):
+            with jit.using(bool(seed % 2)):
+                on, off = solve_apx(prob, delta), solve_apx(prob, delta, pair_filter=False)
+            assert (on.vertices, on.utility, on.best_subset_utility) == (
+                off.vertices,
+                off.utility,
+                off.best_subset_utility,
+            )
+            assert (on.proven_optimal, on.upper_bound, on.subsets_total) == (
+                off.proven_optimal,
+                off.upper_bound,
+                off.subsets_total,
+            )

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tether.recurrent.planning import readiness
 from tether.recurrent.planning.readiness import ReadinessTracker, binding_targets, relay_paths
 
 EDGES = np.array([[0, 1], [1, 2], [0, 3], [3, 4], [0, 5], [6, 7], [7, 0]])
@@ -90,3 +91,26 @@ def test_branch_is_closed_under_shared_relays() -> None:
     assert tracker.branch(0, keys) == {0, 1, 2, 3}
     assert tracker.branch(3, keys) == {0, 1, 2, 3}
     assert tracker.branch(5, keys) == {4, 5}
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_paths_on_the_goals_edges_equal_paths_on_all_edges(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Only edges between goals and the BS are searched: the same ``P_f`` as on every
+    edge (the reference), whichever of several shortest paths the order of each
+    vertex's neighbours picks."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(8, 60))
+    edges = np.array([(a, b) for a in range(n) for b in range(a + 1, n) if rng.random() < 0.2])
+    edges = edges.reshape(-1, 2)[rng.permutation(len(edges))]
+    robots = int(rng.integers(2, min(12, n - 1)))
+    vertices = rng.choice(np.arange(1, n), size=robots, replace=False).tolist()
+    goals = dict(enumerate(vertices))
+    times = {r: float(rng.integers(0, 6)) for r in goals}
+    targets = [r for r in goals if rng.random() < 0.7]
+    got = relay_paths(goals, times, targets, edges)
+    with monkeypatch.context() as m:
+        m.setattr(readiness, "_edges_between", lambda e, _v: np.asarray(e).reshape(-1, 2))
+        want = relay_paths(goals, times, targets, edges)
+    assert got == want

@@ -7,10 +7,17 @@ scenario can pick an implementation by name and users can add their own::
 
     @STRATEGIES.register("my_strategy")
     class MyStrategy: ...
+
+A name can also be *provided* before its module is imported
+(``STRATEGIES.provide("my_strategy", "my_package.strategy")``): it is listed, found by
+``in`` and named in the error for an unknown name at once, and its module is imported
+the first time :meth:`Registry.get` asks for it (the built-in plug-ins are provided
+this way by :mod:`tether.plugins`, so a run imports only the strategy it uses).
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
 
@@ -22,39 +29,85 @@ def _qualname(obj: object) -> str:
 
 
 class Registry(Generic[T]):
-    """A named table of factories with a helpful error for unknown names."""
+    """A named table of factories with a helpful error for unknown names.
+
+    Parameters
+    ----------
+    kind
+        What the factories make, for messages (``"strategy"``, ``"scene"``, ...).
+    """
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
         self._items: dict[str, T] = {}
+        self._providers: dict[str, str] = {}  # name -> module whose import registers it
 
     def register(self, name: str) -> Callable[[T], T]:
+        """A decorator that registers its object under ``name``.
+
+        A name provided by another module (:meth:`provide`) is loaded first, so a
+        clash with it is reported as if that module had been imported before.
+        """
+
         def decorator(obj: T) -> T:
+            provider = self._providers.get(name)
+            if provider is not None and getattr(obj, "__module__", None) != provider:
+                self._load(name)
             old = self._items.get(name)
             if old is not None and old is not obj and _qualname(old) != _qualname(obj):
                 raise ValueError(
                     f"{self.kind} {name!r} is already registered by {_qualname(old)}"
                 )  # the same definition re-run (module reload, notebook) simply replaces it
             self._items[name] = obj
+            self._providers.pop(name, None)
             return obj
 
         return decorator
 
+    def provide(self, name: str, module: str) -> None:
+        """Declare that importing ``module`` registers ``name`` (imported on first use).
+
+        Parameters
+        ----------
+        name
+            The registered name.
+        module
+            The dotted name of the module that defines and registers it (its objects'
+            ``__module__``). If another module registered ``name`` already, this one is
+            imported now, so the clash is reported as it would be without laziness.
+        """
+        old = self._items.get(name)
+        if old is None:
+            self._providers[name] = module
+        elif getattr(old, "__module__", None) != module:
+            importlib.import_module(module)  # its registration reports the clash
+
+    def _load(self, name: str) -> None:
+        """Import the module that provides ``name``."""
+        module = self._providers[name]
+        importlib.import_module(module)
+        if name not in self._items:
+            raise LookupError(f"{module} was imported but registered no {self.kind} {name!r}")
+
     def get(self, name: str) -> T:
+        """The factory registered under ``name`` (its module imported if provided)."""
+        if name not in self._items and name in self._providers:
+            self._load(name)
         try:
             return self._items[name]
         except KeyError:
-            known = ", ".join(sorted(self._items)) or "none"
+            known = ", ".join(self.names()) or "none"
             raise KeyError(f"unknown {self.kind} {name!r}; expected one of: {known}") from None
 
     def names(self) -> list[str]:
-        return sorted(self._items)
+        """Every registered or provided name, sorted (no module is imported)."""
+        return sorted(self._items.keys() | self._providers.keys())
 
     def __contains__(self, name: object) -> bool:
-        return name in self._items
+        return name in self._items or name in self._providers
 
     def __iter__(self) -> Iterator[str]:
-        return iter(sorted(self._items))
+        return iter(self.names())
 
 
 STRATEGIES: Registry[type] = Registry("strategy")

@@ -95,12 +95,42 @@ def laplacian_dense(n: int, pairs: np.ndarray, weights: np.ndarray | None = None
     return lap
 
 
+#: up to this many nodes :func:`components` labels by union-find (scipy's numbering):
+#: building the sparse matrix costs ten times the search there
+SMALL_COMPONENTS_N = 64
+
+
 def components(n: int, pairs: np.ndarray) -> tuple[int, np.ndarray]:
     """Number of connected components and the component label of each robot."""
     if n == 0:
         return 0, np.empty(0, dtype=np.intp)
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
+    if n <= SMALL_COMPONENTS_N and (len(pairs) == 0 or (pairs.min() >= 0 and pairs.max() < n)):
+        return _small_components(n, pairs)
     count, labels = connected_components(adjacency(n, pairs), directed=False)
     return int(count), labels
+
+
+def _small_components(n: int, pairs: np.ndarray) -> tuple[int, np.ndarray]:
+    """:func:`components` by union-find, labels numbered by each component's first node
+    (as ``scipy.sparse.csgraph.connected_components`` numbers them; tested)."""
+    parent = list(range(n))
+
+    def root(x: int) -> int:
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    for a, b in pairs.tolist():
+        ra, rb = root(a), root(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    labels = np.empty(n, dtype=np.int32)
+    first: dict[int, int] = {}
+    for v in range(n):
+        labels[v] = first.setdefault(root(v), len(first))
+    return len(first), labels
 
 
 def component_count(n: int, pairs: np.ndarray) -> int:

@@ -62,6 +62,7 @@ class CoarseGrid:
         self.n_nodes = len(cells)
         self._graph: sp.csr_matrix | None = None
         self._components: np.ndarray | None = None
+        self._kernel_view: tuple[np.ndarray, np.ndarray, float, float] | None = None
 
     @property
     def graph(self) -> sp.csr_matrix:
@@ -185,13 +186,18 @@ class CoarseGrid:
         return grid_dijkstra_kernel(*self._kernel_grid(), sources, predecessors)
 
     def _kernel_grid(self) -> tuple[np.ndarray, np.ndarray, float, float]:
-        """The kernels' view of the grid: padded mask, raveled node cells, edge weights."""
-        cx, cy = self.shape
-        padded = np.zeros((cx + 2, cy + 2), dtype=bool)
-        padded[1:-1, 1:-1] = self.traversable
-        flat = (self.cells[:, 0] + 1) * (cy + 2) + self.cells[:, 1] + 1
-        w_orth, w_diag = self.factor * 1.0, self.factor * np.sqrt(2.0)  # as _build_graph
-        return padded, flat, w_orth, w_diag
+        """The kernels' view of the grid: padded mask, raveled node cells, edge weights.
+
+        Made once per grid (every search and every traced path reads it).
+        """
+        if self._kernel_view is None:
+            cx, cy = self.shape
+            padded = np.zeros((cx + 2, cy + 2), dtype=bool)
+            padded[1:-1, 1:-1] = self.traversable
+            flat = (self.cells[:, 0] + 1) * (cy + 2) + self.cells[:, 1] + 1
+            w_orth, w_diag = self.factor * 1.0, self.factor * np.sqrt(2.0)  # as _build_graph
+            self._kernel_view = (padded, flat, w_orth, w_diag)
+        return self._kernel_view
 
     def path(self, pred_row: np.ndarray, target: int) -> np.ndarray:
         """Fine waypoints from the Dijkstra source to ``target`` (source included)."""

@@ -1,11 +1,14 @@
 """Compiled Dijkstra on a coarse grid (numba; imported only by :mod:`tether.paths.geodesic`).
 
 :func:`grid_dijkstra_kernel` runs Dijkstra's algorithm from each source on the
-8-connected graph of :class:`~tether.paths.geodesic.CoarseGrid` read from the grid
-itself (neighbours by offsets, two edge weights), with Dial's bucket queue
-(Dial 1969) instead of a heap: buckets are a little narrower than the lightest edge,
-so relaxing an edge from bucket ``b`` always lands in a later bucket and every label
-in bucket ``b`` is final when it is reached; its nodes need no order.
+8-connected graph of :class:`~tether.paths.geodesic.CoarseGrid`, read from the grid
+once per call into a table of each node's neighbours (:func:`neighbour_table`). The
+graph has two edge weights, so the queue is two FIFO queues, one per weight, instead
+of a heap: labels leave the queue in non-decreasing order, so each label pushed onto
+a queue (the one just taken plus that queue's weight) is no smaller than the one
+pushed before it, each queue stays sorted, and the smaller of the two heads is the
+smallest label queued. A label is final when it leaves the queue; an entry whose node
+got a smaller label since is skipped.
 
 Distances equal ``scipy.sparse.csgraph.dijkstra``'s bit for bit, whatever order
 either queue settles equal labels in: both compute ``d(x) = min_u fl(d(u) + w(u, x))``
@@ -26,14 +29,10 @@ path crosses one.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
 NO_PRED = -9999  # scipy's predecessor of a source or an unreached node
-#: buckets are this much narrower than the lightest edge (far above rounding)
-BUCKET_SHRINK = 1.0 - 2.0**-20
 
 
 @njit(cache=True)
@@ -50,6 +49,74 @@ def _offsets(width):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
+def neighbour_table(free, nodes):  # noqa: ANN001, ANN201
+    """``(n, 8)`` node ids of each node's neighbours (``-1``: none), as :func:`_offsets`.
+
+    Columns 0-3 are the orthogonal neighbours, 4-7 the diagonal ones, a diagonal one
+    only when both orthogonal cells between are traversable (no corner cut).
+    """
+    width = free.shape[1]
+    flat = free.ravel()
+    n = len(nodes)
+    node_of = np.full(free.size, -1, np.int32)
+    for i in range(n):
+        node_of[nodes[i]] = i
+    step, via_x, via_y = _offsets(width)
+    table = np.full((n, 8), -1, np.int32)
+    for i in range(n):
+        u = nodes[i]
+        for j in range(8):
+            if not flat[u + step[j]]:
+                continue
+            if j >= 4 and not (flat[u + via_x[j]] and flat[u + via_y[j]]):
+                continue
+            table[i, j] = node_of[u + step[j]]
+    return table
+
+
+@njit(cache=True)
+def _search(table, w_orth, w_diag, source, d, qa, la, qb, lb):  # noqa: ANN001, ANN202
+    """Dijkstra from node ``source`` into ``d`` (``(n,)``, overwritten) with two FIFO queues.
+
+    ``qa``/``la`` hold the nodes and labels pushed along orthogonal edges, ``qb``/``lb``
+    along diagonal ones (each at least ``4 n + 1`` long: a node is taken once and
+    pushes at most four entries onto each).
+    """
+    d[:] = np.inf
+    d[source] = 0.0
+    qa[0] = source
+    la[0] = 0.0
+    ha, ta, hb, tb = 0, 1, 0, 0
+    while True:
+        if ha < ta and (hb >= tb or la[ha] <= lb[hb]):
+            u, du = qa[ha], la[ha]
+            ha += 1
+        elif hb < tb:
+            u, du = qb[hb], lb[hb]
+            hb += 1
+        else:
+            return
+        if du != d[u]:
+            continue  # its label fell since (that entry came first)
+        nd = du + w_orth
+        for j in range(4):
+            v = table[u, j]
+            if v >= 0 and nd < d[v]:  # never for a taken v: its label is <= du
+                d[v] = nd
+                qa[ta] = v
+                la[ta] = nd
+                ta += 1
+        nd = du + w_diag
+        for j in range(4, 8):
+            v = table[u, j]
+            if v >= 0 and nd < d[v]:
+                d[v] = nd
+                qb[tb] = v
+                lb[tb] = nd
+                tb += 1
+
+
+@njit(cache=True)
 def grid_dijkstra_kernel(free, nodes, w_orth, w_diag, sources, with_pred):  # noqa: ANN001, ANN201
     """Distances, predecessors and ties ``(k, n)`` from each source node.
 
@@ -61,7 +128,6 @@ def grid_dijkstra_kernel(free, nodes, w_orth, w_diag, sources, with_pred):  # no
     arrays are empty.
     """
     width = free.shape[1]
-    size = free.size
     flat = free.ravel()
     n = len(nodes)
     k = len(sources)
@@ -69,64 +135,29 @@ def grid_dijkstra_kernel(free, nodes, w_orth, w_diag, sources, with_pred):  # no
     rows = k if with_pred else 0
     pred = np.full((rows, n), NO_PRED, np.int32)
     tie = np.zeros((rows, n), np.bool_)
-    node_of = np.full(size, NO_PRED, np.int32)
-    for i in range(n):
-        node_of[nodes[i]] = i
-    step, via_x, via_y = _offsets(width)
-    cost = np.empty(8)
-    cost[:4] = w_orth
-    cost[4:] = w_diag
-    bucket = min(w_orth, w_diag) * BUCKET_SHRINK
-    ring = int(math.ceil(max(w_orth, w_diag) / bucket)) + 3
-    head = np.empty(ring, np.int64)
-    cap = 8 * n + 1  # each entry: the source, or a strict decrease along an edge
-    nxt = np.empty(cap, np.int64)
-    item = np.empty(cap, np.int64)
-    done = np.zeros(size, np.bool_)
-    d = np.empty(size)
-    for row in range(k):
-        d[:] = np.inf
-        head[:] = -1
-        done[:] = False
-        s = nodes[sources[row]]
-        d[s] = 0.0
-        item[0] = s
-        nxt[0] = -1
-        head[0] = 0
-        used = 1
-        pending = 1
-        b = 0
-        while pending > 0:
-            slot = b % ring
-            while head[slot] >= 0:
-                entry = head[slot]
-                head[slot] = nxt[entry]
-                pending -= 1
-                u = item[entry]
-                if done[u] or int(d[u] / bucket) != b:
-                    continue  # settled already, or its label fell to a lower bucket since
-                done[u] = True
-                du = d[u]
-                for j in range(8):
-                    v = u + step[j]
-                    if not flat[v]:
-                        continue
-                    if j >= 4 and not (flat[u + via_x[j]] and flat[u + via_y[j]]):
-                        continue
-                    nd = du + cost[j]
-                    if nd < d[v]:  # never for a settled v: its label is <= du
-                        d[v] = nd
-                        t = int(nd / bucket) % ring
-                        item[used] = v
-                        nxt[used] = head[t]
-                        head[t] = used
-                        used += 1
-                        pending += 1
-            b += 1
+    table = neighbour_table(free, nodes)
+    cap = 4 * n + 1
+    qa = np.empty(cap, np.int32)
+    qb = np.empty(cap, np.int32)
+    la = np.empty(cap)
+    lb = np.empty(cap)
+    if with_pred:
+        node_of = np.full(free.size, NO_PRED, np.int32)
         for i in range(n):
-            dist[row, i] = d[nodes[i]]
+            node_of[nodes[i]] = i
+        step, via_x, via_y = _offsets(width)
+        cost = np.empty(8)
+        cost[:4] = w_orth
+        cost[4:] = w_diag
+        padded = np.full(free.size, np.inf)
+    for row in range(k):
+        _search(table, w_orth, w_diag, sources[row], dist[row], qa, la, qb, lb)
         if with_pred:
-            _predecessors(flat, d, nodes, node_of, step, via_x, via_y, cost, pred[row], tie[row])
+            for i in range(n):
+                padded[nodes[i]] = dist[row, i]
+            _predecessors(
+                flat, padded, nodes, node_of, step, via_x, via_y, cost, pred[row], tie[row]
+            )
     return dist, pred, tie
 
 

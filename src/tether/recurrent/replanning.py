@@ -279,7 +279,7 @@ class RecurrentStrategy:
             self.visited.setdefault(int(keys[r]), sim.goal[r].copy())
         relays = np.array(list(self.visited.values())).reshape(-1, 2)
         graph = self.builder.build(sim.knowledge.global_known, sim.base, relays, coarse)
-        goal_v = np.array([graph.vertex_of_node(int(coarse.node_at(g)[0])) for g in sim.goal])
+        goal_v = graph.vertices_of_nodes(coarse.node_at(sim.goal))
         ready_ids = np.flatnonzero(ready)
         nonready = np.flatnonzero(~ready & sim.alive)
         fixed = {int(goal_v[r]) for r in nonready if goal_v[r] > 0}
@@ -423,8 +423,9 @@ class RecurrentStrategy:
         """Relay paths ``P_f`` of the plan (Sec. VI; whose: ``relay_binding``)."""
         goals: dict[int, int] = {}
         times: dict[int, float] = {}
+        goal_v = graph.vertices_of_nodes(coarse.node_at(sim.goal)).tolist()
         for r in np.flatnonzero(sim.alive).tolist():
-            v = graph.vertex_of_node(int(coarse.node_at(sim.goal[r])[0]))
+            v = goal_v[r]
             if v < 0 or v in goals.values():
                 continue
             goals[r] = v

@@ -18,7 +18,6 @@ from functools import cache
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
-import matplotlib
 import numpy as np
 
 from tether.viz import style
@@ -41,6 +40,8 @@ def pyplot() -> ModuleType:
     or a sweep trial with ``figures: false`` never pays it
     (``tests/test_lazy_pyplot.py``).
     """
+    import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -23,10 +23,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.colors import LinearSegmentedColormap, ListedColormap, to_rgba
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.colors import Colormap
 
     from tether.world.grid import OccupancyGrid
 
@@ -65,13 +65,57 @@ ROLE_CYCLE = (
     "#a6761d",
 )
 
-#: Link colour by margin in [0, 1]: red (about to break) -> amber -> green (well connected).
-LINK_CMAP = LinearSegmentedColormap.from_list("tether_link", [LINK_BAD, LINK_MID, LINK_GOOD])
 #: Obstacle height seen from above: light (low) to dark (tall) grey-blue.
 HEIGHT_STOPS = ("#b9c3cf", "#5b6b7f", "#1c2633")
-HEIGHT_CMAP = LinearSegmentedColormap.from_list("tether_height", list(HEIGHT_STOPS))
-#: Cell states of a map: 0 free, 1 occupied, 2 unknown free, 3 unknown occupied.
-MAP_CMAP = ListedColormap([FREE, OCCUPIED, UNKNOWN, UNKNOWN_OCCUPIED], name="tether_map")
+
+
+def _link_cmap() -> Colormap:
+    """Link colour by margin in [0, 1]: red (about to break) -> amber -> green."""
+    from matplotlib.colors import LinearSegmentedColormap
+
+    return LinearSegmentedColormap.from_list("tether_link", [LINK_BAD, LINK_MID, LINK_GOOD])
+
+
+def _height_cmap() -> Colormap:
+    """Obstacle height seen from above: :data:`HEIGHT_STOPS`, light (low) to dark (tall)."""
+    from matplotlib.colors import LinearSegmentedColormap
+
+    return LinearSegmentedColormap.from_list("tether_height", list(HEIGHT_STOPS))
+
+
+def _map_cmap() -> Colormap:
+    """Cell states of a map: 0 free, 1 occupied, 2 unknown free, 3 unknown occupied."""
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap([FREE, OCCUPIED, UNKNOWN, UNKNOWN_OCCUPIED], name="tether_map")
+
+
+#: the colour maps ``LINK_CMAP``, ``HEIGHT_CMAP`` and ``MAP_CMAP``, made on first use
+#: (:func:`__getattr__`): a run without figures never imports matplotlib
+_COLORMAPS = {"LINK_CMAP": _link_cmap, "HEIGHT_CMAP": _height_cmap, "MAP_CMAP": _map_cmap}
+
+
+def __getattr__(name: str) -> Colormap:
+    """``style.LINK_CMAP`` (link margins), ``HEIGHT_CMAP`` (obstacle heights) and
+    ``MAP_CMAP`` (map cell states), made (and kept) when first asked for."""
+    make = _COLORMAPS.get(name)
+    if make is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    cmap = globals()[name] = make()
+    return cmap
+
+
+def colormap(name: str) -> Colormap:
+    """One of the colour maps of :data:`_COLORMAPS` by its name, e.g. ``"LINK_CMAP"``."""
+    return globals()[name] if name in globals() else __getattr__(name)
+
+
+def to_rgba(colour: Any, alpha: float | None = None) -> tuple[float, float, float, float]:
+    """matplotlib's ``to_rgba`` (matplotlib imported on first use)."""
+    from matplotlib.colors import to_rgba as rgba
+
+    return rgba(colour, alpha)
+
 
 X_LABEL = "x (m)"
 Y_LABEL = "y (m)"
@@ -85,7 +129,7 @@ def link_margin(distance_m: np.ndarray, range_m: float) -> np.ndarray:
 
 def link_colours(margin: np.ndarray) -> np.ndarray:
     """RGBA ``(k, 4)`` for link margins in [0, 1] (see :data:`LINK_CMAP`)."""
-    return LINK_CMAP(np.clip(np.asarray(margin, dtype=float), 0.0, 1.0))
+    return colormap("LINK_CMAP")(np.clip(np.asarray(margin, dtype=float), 0.0, 1.0))
 
 
 def role_colour_map(roles: Sequence[str]) -> dict[str, str]:
@@ -159,6 +203,13 @@ def map_states(grid: OccupancyGrid, known: np.ndarray | None = None) -> np.ndarr
     return states
 
 
+def _listed(colour: str) -> Colormap:
+    """A one-colour map (for a mask shown in one colour)."""
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap([colour])
+
+
 def _extent(grid: OccupancyGrid) -> list[float]:
     b = grid.bounds_m
     return [float(b[0, 0]), float(b[1, 0]), float(b[0, 1]), float(b[1, 1])]
@@ -185,7 +236,7 @@ def draw_obstacles_topdown(
             states.T,
             origin="lower",
             extent=_extent(grid),
-            cmap=MAP_CMAP,
+            cmap=colormap("MAP_CMAP"),
             vmin=-0.5,
             vmax=3.5,
             interpolation="nearest",
@@ -198,7 +249,7 @@ def draw_obstacles_topdown(
         shown.T,
         origin="lower",
         extent=_extent(grid),
-        cmap=HEIGHT_CMAP,
+        cmap=colormap("HEIGHT_CMAP"),
         vmin=0.0,
         vmax=max(top, 1e-9),
         interpolation="nearest",
@@ -209,7 +260,7 @@ def draw_obstacles_topdown(
         passable.T,
         origin="lower",
         extent=_extent(grid),
-        cmap=ListedColormap([FREE]),
+        cmap=_listed(FREE),
         alpha=0.6,
         interpolation="nearest",
         zorder=0.5,
@@ -260,7 +311,7 @@ def draw_obstacles_side(
         shown.T,
         origin="lower",
         extent=ext,
-        cmap=ListedColormap([UNKNOWN_OCCUPIED]),
+        cmap=_listed(UNKNOWN_OCCUPIED),
         interpolation="nearest",
         aspect="auto",
         zorder=0,

@@ -14,8 +14,9 @@ to one ``|=`` per robot.
 A group that is the same as at its members' last exchange (and, with the BS, whose
 members hold the BS map's current version) shares one map plus what each member
 sensed since; the exchange then only writes the cells that were new to their
-observers (``incremental``), instead of merging whole maps. Both give the same
-maps (tests compare them).
+observers (``incremental``), instead of merging whole maps; a changed group merges
+one map per group its members last exchanged in (plus what the others sensed since)
+instead of every member's. Both give the same maps (tests compare them).
 """
 
 from __future__ import annotations
@@ -82,7 +83,10 @@ class Knowledge:
             if self.incremental and not (stale or behind):
                 self._exchange_new(members, bs)
                 continue
-            union = np.logical_or.reduce(self.local_known[members], axis=0)
+            if self.incremental:
+                union = self._union(members)
+            else:
+                union = np.logical_or.reduce(self.local_known[members], axis=0)
             if bs:
                 grown = union & ~self.global_known
                 if grown.any():
@@ -96,6 +100,25 @@ class Knowledge:
                     self._seen[r] = self.global_version
                 self._pending[r].clear()
             self.dirty[members] = False
+
+    def _union(self, members: list[int]) -> np.ndarray:
+        """The union of the members' maps, one map per group they last exchanged in.
+
+        Robots that last exchanged in the same group left it with equal maps (and
+        robots that never exchanged all started from an empty one); since then each
+        added only its ``_pending`` cells. So the union is that of one member's map per
+        such group, plus the cells the others sensed since.
+        """
+        first: dict[frozenset[int], int] = {}
+        for r in members:
+            first.setdefault(self._last_group[r], r)
+        reps = list(first.values())
+        union = np.logical_or.reduce(self.local_known[reps], axis=0)
+        taken = set(reps)
+        rest = [c for r in members if r not in taken for c in self._pending[r]]
+        if rest:
+            union.reshape(-1)[np.concatenate(rest)] = True
+        return union
 
     def _exchange_new(self, members: list[int], bs: bool) -> None:
         """The exchange of an unchanged group: only the cells sensed since the last one.

@@ -189,6 +189,8 @@ class ExplorationSim:
         self.goal_at_failure = np.full((n, 2), np.nan)  # the goal it was heading to
         self.moved = np.zeros(n, dtype=bool)  # advanced along its path in the last step
         self.knowledge = Knowledge(self.shape, n)
+        # explored_fraction() of the BS map version it was counted for
+        self._explored: tuple[int, float] = (-1, 0.0)
         self.connected = np.ones(n, dtype=bool)
         self.groups: list[list[int]] = [list(range(n))]
         self.t = 0
@@ -338,9 +340,17 @@ class ExplorationSim:
         self.delivered |= self.connected & self.at_goal & self.scanned
 
     def explored_fraction(self) -> float:
-        """Share of the reachable free area known at the BS."""
-        known = self.knowledge.global_known
-        return np.count_nonzero(known & self.free_region) / self.free_total
+        """Share of the reachable free area known at the BS.
+
+        Counted once per version of the BS map (``Knowledge.global_version``, bumped
+        whenever it grows).
+        """
+        version = self.knowledge.global_version
+        if self._explored[0] != version:
+            known = self.knowledge.global_known
+            share = np.count_nonzero(known & self.free_region) / self.free_total
+            self._explored = (version, share)
+        return self._explored[1]
 
     def step(self) -> None:
         """Advance by one step: move, sense, communicate, then the policy decides."""

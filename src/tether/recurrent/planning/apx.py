@@ -19,7 +19,7 @@ combinatorial number system, not hashed):
 The tables are filled *on demand* (:class:`LazySteiner`): a row is computed
 the first time a subset examined by Algorithm 1 needs it, so the work follows
 the subsets Algorithm 1 reaches, not all ``sum_s C(|F|, s)`` of them. The
-subsets themselves are generated lazily too (:func:`_bands`): in the order of
+subsets themselves are generated lazily too (:mod:`.apx_bands`): in the order of
 genNewSubset (decreasing utility, increasing size) band by band of utility,
 so the utility bound of Step 10 stops the enumeration as well as the DP.
 
@@ -29,16 +29,20 @@ Before any DP work on a subset the paper's pruning rules run: the distance
 lower bound of Step 6 (the largest shortest-path distance between two
 vertices of ``F + {b}``) and the closed list of Steps 7 and 13 (a subset
 with an infeasible subset is infeasible; since Steiner costs are monotone,
-checking the subsets with one frontier fewer suffices). The selection loop is
-Algorithm 1 itself: the utility test of Step 10, the budget test of Step 12;
-then completeConfiguration (Step 20). :class:`SharedSteiner` fills every
-table eagerly (all subsets of sizes ``< delta``) for tests and benchmarks.
+checking the subsets with one frontier fewer suffices). For ``delta >= 3`` the
+``E`` rows of every frontier are made first; at the other frontier they are the
+costs of all pairs, and a subset with a pair that does not fit the budget is
+infeasible for the same reason (the *pair filter*): genNewSubset does not make
+such subsets and the DP prunes them before the closed list (the same result with
+far fewer subsets, ``docs/performance.md``; the reference is ``pair_filter=False``).
+The selection loop is Algorithm 1 itself: the utility test of Step 10, the budget
+test of Step 12; then completeConfiguration (Step 20). :class:`SharedSteiner` fills
+every table eagerly (all subsets of sizes ``< delta``) for tests and benchmarks.
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import lru_cache
 from math import comb
@@ -46,15 +50,13 @@ from math import comb
 import numpy as np
 
 from tether import jit
+from tether.recurrent.planning.apx_bands import bands
 from tether.recurrent.planning.complete import complete_configuration
 from tether.recurrent.planning.problem import Problem
 from tether.recurrent.planning.steiner import dreyfus_wagner
 
 CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
 FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles
-FIRST_BAND = 1 / 64  # width of the first utility band, relative to the best subset
-LOWEST_BAND_RATIO = 0.75  # a band (lo, hi] has lo >= this * hi (unless it is the last)
-BAND_SUBSETS = 20_000  # a band after a larger one is narrower in proportion
 
 
 @dataclass
@@ -185,6 +187,10 @@ class LazySteiner:
     infeasible or pruned by Step 6 or the closed list. Costs of subsets of
     size ``< delta`` are memoised by rank (the closed list looks them up);
     the DP rows (``P``, ``g``, ``E``) are computed once, when first needed.
+    With ``pair_filter`` (and ``delta >= 3``) every ``E`` row is made at once and
+    ``pair_ok`` says which pairs of frontiers fit the budget with ``b``; subsets of
+    three or more frontiers with a pair that does not are pruned first
+    (:meth:`pairs_fit`). The costs are the same either way.
     """
 
     def __init__(
@@ -194,6 +200,7 @@ class LazySteiner:
         budget: int,
         delta: int,
         unit_graph: bool = False,
+        pair_filter: bool = True,
     ) -> None:
         self.budget = budget
         self.cap = cap = budget + 1
@@ -219,6 +226,11 @@ class LazySteiner:
         self.e_rows = _RowStore(k, n, self.dtype)  # E[a], built only for delta >= 3
         self.memo = {s: np.full(self.ranker.count(s), -1, np.int32) for s in range(2, delta)}
         self.evaluated = 0
+        # pairs of frontiers whose tree with b fits the budget, from the E rows (the
+        # 3-terminal trees on {b, a, w}) at the other frontier; kept for delta >= 3
+        self.pair_ok: np.ndarray | None = None
+        if pair_filter and delta >= 3:
+            self.pair_ok = self.e_row(np.arange(k))[:, frontiers] <= budget
 
     # -------------------------------------------------------------- costs
 
@@ -255,10 +267,26 @@ class LazySteiner:
             ok[idx] = self.steiner_costs(sub) <= self.budget
         return ok
 
+    def pairs_fit(self, combos: np.ndarray) -> np.ndarray:
+        """Every pair of frontiers of ``F`` has a tree with ``b`` within the budget.
+
+        Steiner costs are monotone (a tree spanning ``F + {b}`` spans every part of
+        it), so a subset with a pair that does not fit does not either. Implies Step
+        6; a necessary condition of the closed list for ``|F| >= 3``, checked before it
+        (the pairs' costs come with the E rows, the closed list's with more DP).
+        """
+        ok = np.ones(len(combos), dtype=bool)
+        for i, j in itertools.combinations(range(combos.shape[1]), 2):
+            ok &= self.pair_ok[combos[:, i], combos[:, j]]
+        return ok
+
     def _evaluate(self, combos: np.ndarray) -> np.ndarray:
         """Pruning (Step 6, closed list), then the DP for the survivors."""
         out = np.full(len(combos), self.cap, dtype=np.int32)
-        ok = self.within_lower_bound(combos)
+        if self.pair_ok is not None and combos.shape[1] >= 3:
+            ok = self.pairs_fit(combos)
+        else:
+            ok = self.within_lower_bound(combos)
         ok[ok] = self.closed_list_ok(combos[ok])
         idx = np.flatnonzero(ok)
         self.evaluated += len(idx)
@@ -353,97 +381,14 @@ class SharedSteiner(LazySteiner):
             self.costs[self.delta][rows] = self.steiner_costs(self.levels.combos[self.delta][rows])
 
 
-# ---------------------------------------------------------------- genNewSubset
+def solve_apx(problem: Problem, delta: int, pair_filter: bool = True) -> ApxResult:
+    """Algorithm 1 with ``delta``, then completeConfiguration (Step 20).
 
-
-def _subsets_in_band(uf: np.ndarray, s: int, lo: float, hi: float) -> np.ndarray:
-    """Sorted ``s``-subsets of positions with ``lo < U(F) <= hi`` (``uf`` non-increasing).
-
-    Built position by position; a prefix is extended only by the contiguous
-    range of next positions for which some completion can land in the band
-    (the ``r`` positions right after give the largest completion, the last
-    ``r`` positions the smallest). Exact band membership is decided on the
-    sums recomputed as Algorithm 1 ranks them.
+    ``pair_filter``: subsets with a pair of frontiers that does not fit the budget
+    are neither made nor costed (:class:`LazySteiner`); they are infeasible, so the
+    result is the same as without (the reference, ``False``) but for the work
+    counters (``subsets_evaluated``).
     """
-    k = len(uf)
-    if s > k:
-        return np.empty((0, s), dtype=np.intp)
-    csum = np.concatenate([[0.0], np.cumsum(uf)])
-    slack = 1e-9 * (1.0 + csum[-1])
-    pre = np.empty((1, 0), dtype=np.intp)
-    psum = np.zeros(1)
-    for t in range(s):
-        r = s - t - 1  # positions still to choose after this one
-        window = csum[r + 1 :] - csum[: k - r]  # uf[j] + the r next values, j <= k-1-r
-        tail = csum[k] - csum[k - r]  # the r smallest values
-        start = pre[:, -1] + 1 if t else np.zeros(len(pre), dtype=np.intp)
-        stop = np.searchsorted(-window, psum - lo + slack, side="left")
-        first = np.searchsorted(-uf[: k - r], psum + tail - hi - slack, side="left")
-        first = np.maximum(start, first)
-        count = np.maximum(stop - first, 0)
-        owner = np.repeat(np.arange(len(pre)), count)
-        offset = np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count)
-        nxt = first[owner] + offset
-        pre = np.column_stack([pre[owner], nxt])
-        psum = psum[owner] + uf[nxt]
-    util = uf[pre].sum(axis=1)
-    return pre[(util > lo) & (util <= hi)]
-
-
-def _bands(uf: np.ndarray, delta: int, ranker: _Ranker) -> Iterator[tuple[np.ndarray, ...]]:
-    """genNewSubset: subsets of <= ``delta`` positions, band by band of utility.
-
-    Yields ``(util, size, combos, lo)`` (``combos`` padded with -1 to ``delta``
-    columns; ``lo`` the band's lower end: every later subset has ``U <= lo``)
-    ordered by decreasing utility, increasing size, then colex rank, i.e. exactly
-    the order of a global sort; bands are disjoint utility intervals ``(lo, hi]``,
-    the first :data:`FIRST_BAND` times the ``delta``-th utility wide, then of
-    doubling width with ``lo >= LOWEST_BAND_RATIO * hi``, narrower when the growth
-    of the last bands predicts more than :data:`BAND_SUBSETS` subsets; a consumer
-    that stops early (Step 10) never makes the later bands.
-    """
-    top = float(uf[:delta].sum())
-    floor = float(uf.min())  # no subset has a smaller utility (utilities are > 0)
-    # the first band's width scales with the delta-th utility, not the best subset's: one
-    # frontier far more useful than the rest (a robot next to it) would put every subset
-    # holding it into one band (C(109, 3) = 209 k subsets where the search stopped after
-    # 16 k, issue 14)
-    width = float(uf[min(delta, len(uf)) - 1]) * FIRST_BAND
-    hi, lo, last = np.inf, top - width, 0
-    while True:
-        if lo < max(floor, 1e-9 * top):
-            lo = -1.0  # the last band: every subset left
-        parts = [_subsets_in_band(uf, s, lo, hi) for s in range(1, delta + 1)]
-        combos = np.full((sum(len(p) for p in parts), delta), -1, dtype=np.intp)
-        util, size, rank, at = [], [], [], 0
-        for s, p in enumerate(parts, start=1):
-            combos[at : at + len(p), :s] = p
-            at += len(p)
-            util.append(uf[p].sum(axis=1))
-            size.append(np.full(len(p), s))
-            rank.append(ranker.rank(p))
-        util_a, size_a = np.concatenate(util), np.concatenate(size)
-        order = np.lexsort((np.concatenate(rank), size_a, -util_a))
-        yield util_a[order], size_a[order], combos[order], lo
-        if lo < 0:
-            return
-        # widths double (as Algorithm 1's bands), but a band never reaches below
-        # LOWEST_BAND_RATIO of its upper end: the number of subsets grows steeply as the
-        # utility falls, and Step 10 usually stops inside the band (issue 14: one band of
-        # 1.9 M subsets cost 2 s where the search stopped in its first thousands)
-        # ... and narrower in proportion when, at the growth from the last band to this
-        # one, it would hold more than BAND_SUBSETS subsets (they crowd at lower
-        # utilities: a wide last band was mostly made after the subset that stopped the
-        # search)
-        width = min(2.0 * width, (1.0 - LOWEST_BAND_RATIO) * lo)
-        guess = len(util_a) * max(1.0, len(util_a) / max(1, last))  # next band, same growth
-        if guess > BAND_SUBSETS:
-            width = min(width, (hi - lo if hi < np.inf else width) * BAND_SUBSETS / guess)
-        hi, lo, last = lo, lo - width, len(util_a)
-
-
-def solve_apx(problem: Problem, delta: int) -> ApxResult:
-    """Algorithm 1 with ``delta``, then completeConfiguration (Step 20)."""
     budget = problem.budget
     fr = problem.frontiers
     fr = fr[problem.dist[0, fr] <= budget]
@@ -455,12 +400,16 @@ def solve_apx(problem: Problem, delta: int) -> ApxResult:
     # subsets only feeds the DP infeasible work (C(120, 4) = 8.2 M subsets when 3
     # robots are ready), so the subsets stop at min(delta, budget) frontiers; the
     # result is the same.
-    dp = LazySteiner(problem.dist, fr, budget, min(delta, budget), unit_graph=True)
+    dp = LazySteiner(
+        problem.dist, fr, budget, min(delta, budget), unit_graph=True, pair_filter=pair_filter
+    )
     uf = problem.utility[fr]
     dist_f = np.where(problem.dist > budget, np.inf, problem.dist).astype(float)
     z_best, tree_best, u_best = 0.0, {0}, 0.0
     block = FIRST_BLOCK  # grows across bands: narrow bands do not restart at small blocks
-    for util, size, combos, lower in _bands(uf, dp.delta, dp.ranker):
+    # subsets with a pair of frontiers that does not fit the budget are infeasible
+    # (LazySteiner.pairs_fit): genNewSubset leaves them out; they could only be skipped
+    for util, size, combos, lower in bands(uf, dp.delta, dp.ranker.rank, dp.pair_ok):
         pos = 0
         while pos < len(util) and util[pos] > z_best:
             end = pos + int(np.searchsorted(-util[pos : pos + block], -z_best, side="left"))

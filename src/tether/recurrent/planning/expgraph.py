@@ -67,6 +67,15 @@ class ExplorationGraph:
         hit = np.flatnonzero(self.nodes == node)
         return int(hit[0]) if len(hit) else -1
 
+    def vertices_of_nodes(self, nodes: np.ndarray) -> np.ndarray:
+        """:meth:`vertex_of_node` of each node of ``nodes`` (vertices sit on distinct nodes)."""
+        nodes = np.asarray(nodes, dtype=np.intp)
+        if self.n == 0:
+            return np.full(len(nodes), -1, dtype=np.intp)
+        order = np.argsort(self.nodes, kind="stable")
+        at = np.minimum(np.searchsorted(self.nodes[order], nodes), self.n - 1)
+        return np.where(self.nodes[order][at] == nodes, order[at], -1)
+
     def geodesic(self, points: np.ndarray) -> np.ndarray:
         """Geodesic distance estimates (cells) from each point to every vertex, ``(k, V)``."""
         src = self.coarse.node_at(points)
@@ -269,11 +278,9 @@ class GraphBuilder:
     def _edges(self, known: np.ndarray, keys_: np.ndarray, positions: np.ndarray) -> np.ndarray:
         # keys_ are coarse *cell* keys (stable while the known map grows; node ids are not)
         nodes = keys_
-        i, j = np.triu_indices(len(nodes), k=1)
+        i, j = pairs_in_range(positions, self.link_model.range_cells)
         if len(i) == 0:
             return np.empty((0, 2), dtype=np.intp)
-        close = np.linalg.norm(positions[i] - positions[j], axis=1) <= self.link_model.range_cells
-        i, j = i[close], j[close]
         lo = np.minimum(nodes[i], nodes[j]).astype(np.int64)
         hi = np.maximum(nodes[i], nodes[j]).astype(np.int64)
         keys = lo * PAIR_BASE + hi
@@ -291,6 +298,19 @@ class GraphBuilder:
                 hard = never(known & self.occupied, positions[i[rest]], positions[j[rest]])
                 self._blocked.add(keys[rest[hard]])
         return np.stack([i[linked], j[linked]], axis=1)
+
+
+def pairs_in_range(positions: np.ndarray, range_cells: float) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex pairs ``i < j`` with ``norm(positions[i] - positions[j]) <= range_cells``.
+
+    In the order of ``np.triu_indices`` (row by row) and with the same distances
+    (``sqrt(dx * dx + dy * dy)``, as ``np.linalg.norm`` sums the squares), from one
+    ``(V, V)`` matrix instead of a gather per pair.
+    """
+    dx = positions[:, 0][:, None] - positions[:, 0][None, :]
+    dy = positions[:, 1][:, None] - positions[:, 1][None, :]
+    close = np.sqrt(dx * dx + dy * dy) <= range_cells
+    return np.nonzero(np.triu(close, 1))
 
 
 #: a pair of coarse cell keys ``lo < hi`` is cached as ``lo * PAIR_BASE + hi``

@@ -51,6 +51,16 @@ def _bfs_path(adj: dict[int, list[int]], allowed: set[int], src: int, dst: int) 
     return None
 
 
+def _edges_between(edges: np.ndarray, vertices: list[int]) -> np.ndarray:
+    """The edges with both ends in ``vertices``, in their order.
+
+    Every search of :func:`relay_paths` stays on the goals and the BS, so only those
+    edges matter; kept in order, each vertex scans its neighbours as in the whole graph.
+    """
+    edges = np.asarray(edges, dtype=int).reshape(-1, 2)
+    return edges[np.isin(edges, vertices).all(axis=1)]
+
+
 def relay_paths(
     goals: dict[int, int],
     travel_times: dict[int, float],
@@ -80,7 +90,7 @@ def relay_paths(
         first), or ``None`` if no such path forms.
     """
     adj: dict[int, list[int]] = {}
-    for a, b in np.asarray(edges, dtype=int).reshape(-1, 2).tolist():
+    for a, b in _edges_between(edges, [base, *goals.values()]).tolist():
         adj.setdefault(a, []).append(b)
         adj.setdefault(b, []).append(a)
     owner = {v: r for r, v in goals.items()}
