@@ -208,3 +208,15 @@ def test_help_lambda_factor_scales_only_the_helpers_force_the_same_compiled_or_n
     assert np.abs(q_on[-1] - q_base[-1]).max() > 1e-3  # the helpers moved otherwise
     assert m_on["helper_robot_s"] > 0 and m_on["min_lambda2_weighted"] > 0
     assert m_on["connected_all_steps"] and m_on["collisions"] == 0
+
+
+def test_help_lambda_factor_defaults_per_preset_and_can_be_switched_off() -> None:
+    """Outdoors a helper's connectivity force is scaled by 0.1 unless a scenario says
+    otherwise; the office preset does not scale it (docs/multi_target.md, "Helpers")."""
+    from tether.continuous.multi_target_params import MultiTargetParams
+
+    assert MultiTargetParams().help_lambda_factor == 0.1
+    assert MultiTargetParams(preset="outdoor").help_lambda_factor == 0.1
+    assert MultiTargetParams(preset="office").help_lambda_factor is None
+    assert MultiTargetParams(preset="outdoor", help_lambda_factor=None).help_lambda_factor is None
+    assert MultiTargetParams(preset="office", help_lambda_factor=0.5).help_lambda_factor == 0.5

@@ -233,11 +233,12 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
     assert (calls["small"] > 0) == (method == "auto")
 
 
-def test_multi_target_keeps_lapack_by_default_so_fig9_repeats() -> None:
-    """The Fig. 9 trials in the docs ran with LAPACK every sub-step; ``connectivity``
-    defaults to the small solver, ``multi_target`` must not (its trials would drift)."""
+def test_multi_target_defaults_to_the_small_solver_as_connectivity_does() -> None:
+    """The Fig. 9 campaign in the docs (seventh session) ran with the certified small
+    solver; ``fiedler_method: lapack`` stays available (the earlier campaigns)."""
     from tether.continuous.multi_target_params import MultiTargetParams
     from tether.continuous.strategy import ConnectivityStrategyParams
 
-    assert MultiTargetParams().fiedler_method == "lapack"
+    assert MultiTargetParams().fiedler_method == "auto"
+    assert MultiTargetParams(fiedler_method="lapack").fiedler_method == "lapack"
     assert ConnectivityStrategyParams().fiedler_method == "auto"

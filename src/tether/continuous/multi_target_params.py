@@ -40,14 +40,20 @@ class StartConfig(_Strict):
     margin_m: float = Field(default=2.0, ge=0)
 
 
+#: our defaults per preset, beyond Table 2 (docs/multi_target.md, "Helpers"): outdoors a
+#: helper's connectivity force is scaled by 0.1 (the Fig. 9 town's stalled primes reach
+#: their targets); in the office it is not (there it made one trial worse)
+PRESET_DEFAULTS: dict[str, dict[str, Any]] = {"outdoor": {"help_lambda_factor": 0.1}}
+
+
 class MultiTargetParams(ConnectivityStrategyParams):
     """Parameters of ``multi_target``: Table 2 (``preset``) plus the open choices."""
 
     targets: TargetsConfig = Field(default_factory=TargetsConfig)
-    #: LAPACK every sub-step by default, so that the Fig. 9 campaign's trials repeat bit for
-    #: bit (docs/multi_target.md); ``auto`` (the certified small solver) is faster and
-    #: gives the same eigenpair to rounding, but trajectories that differ in the last bits
-    fiedler_method: Literal["auto", "lapack"] = "lapack"
+    #: the certified small solver (``lapack``: ``dsyevr`` every sub-step, the eigenpair to
+    #: rounding, trajectories that differ in the last bits; the campaigns before the
+    #: seventh session ran with it)
+    fiedler_method: Literal["auto", "lapack"] = "auto"
     r_grid_m: float = Field(default=0.75, gt=0)
     sigma: float = Field(default=3.0, ge=1)
     v_cruise_mps: float = Field(default=3.0, gt=0)
@@ -89,7 +95,7 @@ class MultiTargetParams(ConnectivityStrategyParams):
         if isinstance(data, dict):
             preset = data.get("preset", "outdoor")
             if preset in TRAVEL_TABLE2:
-                data = {**TRAVEL_TABLE2[preset], **data}
+                data = {**TRAVEL_TABLE2[preset], **PRESET_DEFAULTS.get(preset, {}), **data}
         return data
 
     @model_validator(mode="after")
