@@ -47,9 +47,10 @@ B = {
     "b18": (100, 200, 50, 218),
 }
 
-#: the exact solver runs on instances with at most this many terminals (b01, b02, b04,
-#: b05, b07, b10: about 1 s for both paths; the next size, 17 terminals, takes ~4 s per
-#: instance compiled and longer with the reference path)
+#: the exact solver runs on instances with at most this many terminals: b01, b02, b04,
+#: b05, b07, b10, under 0.1 s each compiled and 0.25 s with the reference path; the next
+#: size, 17 terminals, takes 3-5 s compiled and 15-17 s with the reference path
+#: (benchmarks/results/steinlib_b.json)
 MAX_TERMINALS = 13
 
 SOLVED = [name for name, (_, _, k, _) in B.items() if k <= MAX_TERMINALS]
