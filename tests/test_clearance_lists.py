@@ -17,7 +17,7 @@ import pytest
 
 pytest.importorskip("numba")
 
-from tether.geometry import point_segment_distance  # noqa: E402
+from _clearance_helpers import box_world, brute  # noqa: E402
 from tether.graph.structure import pairs_within  # noqa: E402
 from tether.world import clearance_cache_kernels as cc  # noqa: E402
 from tether.world import clearance_kernels as ck  # noqa: E402
@@ -26,17 +26,6 @@ from tether.world.grid import OccupancyGrid  # noqa: E402
 from tether.world.world import World  # noqa: E402
 
 WITHIN, SLACK = 1.75, 0.25
-
-
-def box_world(rng: np.random.Generator, dim: int) -> World:
-    """20 x 20 (x 8) m at 0.5 m with random boxes (grid-aligned faces: many ties)."""
-    shape = (40, 40, 16)[:dim]
-    occ = np.zeros(shape, dtype=bool)
-    for _ in range(8):
-        lo = rng.integers(0, np.array(shape) - 6)
-        size = rng.integers(2, 7, size=dim)
-        occ[tuple(slice(a, a + s) for a, s in zip(lo, size, strict=True))] = True
-    return World(dim=dim, grid=OccupancyGrid(occ, 0.5, np.zeros(dim)))
 
 
 def table(index: ObstacleIndex, pool: int | None = None) -> tuple[np.ndarray, ...]:
@@ -63,19 +52,11 @@ def uncached(index: ObstacleIndex, a: np.ndarray, b: np.ndarray):
                                einsum_order())  # fmt: skip
 
 
-def brute(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.array([
-        point_segment_distance(points, np.repeat(a[k : k + 1], len(points), 0),
-                               np.repeat(b[k : k + 1], len(points), 0)).min()
-        for k in range(len(a))
-    ])  # fmt: skip
-
-
 def drive(dim: int, seed: int, pool: int | None = None, steps: int = 60) -> int:
     """Move a team through a box world; every call as the uncached search. Returns how
     many segments had a candidate list after the calls (summed over the calls)."""
     rng = np.random.default_rng(seed)
-    world = box_world(rng, dim)
+    world = box_world(rng, dim, boxes=8)
     hi = np.array([20.0, 20.0, 8.0])[:dim]
     index = ObstacleIndex.from_world(world)
     t = table(index, pool)

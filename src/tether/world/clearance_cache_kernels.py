@@ -34,6 +34,7 @@ from tether.world.clearance_kernels import (
     _field_clear,
     _node_gaps,
     _search,
+    closer,
     edot,
     point_sq,
 )
@@ -103,12 +104,9 @@ def _scan(perm, pool, pool_x, first, count, sa, ab, den, reach, order):  # noqa:
         sq, s = point_sq(pool_x, k, sa, ab, den, order)  # pool_x[k] is spts[pool[k]]
         if sq > best2:
             continue  # sqrt(sq) > best: neither closer nor tied
-        dd = math.sqrt(sq)
         e = pool[k]
-        p = perm[e]
-        if dd < best or (best_i >= 0 and dd == best and p < best_i):
-            best, best_s, best_i, best_e = dd, s, p, e
-            best2 = best * best * (1.0 + 1e-12)
+        best, best_s, best_i, best_e = closer(sq, s, perm[e], e, best, best_s, best_i, best_e)
+        best2 = best * best * (1.0 + 1e-12)
     return best, best_s, best_i, best_e
 
 
