@@ -32,13 +32,9 @@ def table(index: ObstacleIndex, pool: int | None = None) -> tuple[np.ndarray, ..
     """A fresh kernel table of ``index`` (its default pool, or ``pool`` slots)."""
     index.kernel_grow(64)
     t = index._kernel_table(64)
-    if pool is not None:
-        t = (
-            *t[:7],
-            np.zeros(pool, dtype=np.int64),
-            np.zeros((pool, index.dim)),
-            np.zeros(1, dtype=np.int64),
-        )
+    if pool is not None:  # the same table with a pool of ``pool`` slots
+        slots = (np.zeros(pool, dtype=np.int64), np.zeros((pool, index.dim)))
+        t = (*t[:8], *slots, np.zeros(2, dtype=np.int64))
     return t
 
 
@@ -78,7 +74,7 @@ def drive(dim: int, seed: int, pool: int | None = None, steps: int = 60) -> int:
         near = np.isfinite(want[0])
         np.testing.assert_allclose(want[0][near], brute(index.points, a[near], b[near]),
                                    atol=1e-9)  # fmt: skip
-        listed += int(np.sum(t[6] >= 0))
+        listed += int(np.sum((t[6] >= 0) & (t[7] == t[10][1])))  # valid lists
     return listed
 
 
@@ -108,4 +104,4 @@ def test_ties_on_a_face_go_to_the_lowest_point_index() -> None:
         for x, y in zip(got, want, strict=True):
             np.testing.assert_array_equal(x, y)
         assert np.isfinite(got[0][0])
-    assert t[6][t[0] == 7][0] >= 0  # the segment was listed
+    assert t[6][t[0] == 7][0] >= 0 and t[7][t[0] == 7][0] == t[10][1]  # listed
