@@ -88,6 +88,12 @@ def summarise(rows: list[dict], sizes: list[int]) -> dict:
     out["complete_share"] = float(np.mean([not f for f in failed])) if rows else None
     out["min_lambda2_weighted"] = min((r["min_lambda2_weighted"] for r in rows), default=None)
     out["collisions"] = int(sum(r["collisions"] for r in rows))
+    for key in ("targets_total", "targets_reached", "targets_dropped"):
+        out[key] = int(sum(r[key] or 0 for r in rows))
+    out["trials_helped"] = int(sum(1 for r in rows if (r.get("help_requests") or 0) > 0))
+    low = min(rows, key=lambda r: r["min_lambda2_weighted"], default=None)
+    if low is not None:
+        out["min_lambda2_trial"] = {"n_robots": low["param:team.n_robots"], "seed": low["seed"]}
     out["failed_trials"] = [
         {"n_robots": r["param:team.n_robots"], "seed": r["seed"], "why": f}
         for r, f in zip(rows, failed, strict=True) if f
@@ -134,6 +140,15 @@ def markdown(result: dict, sizes: list[int]) -> str:
                    + " | |")  # fmt: skip
         for f in entry["failed_trials"]:
             out.append(f"\nFailed: N = {f['n_robots']}, seed {f['seed']}: {f['why']}.")
+        if "targets_total" in entry:
+            low = entry.get("min_lambda2_trial") or {}
+            pending = entry["targets_total"] - entry["targets_reached"] - entry["targets_dropped"]
+            out.append(f"\nTargets: {entry['targets_reached']:,} of {entry['targets_total']:,} "
+                       f"reached, {entry['targets_dropped']} dropped, {pending} pending at the "
+                       f"horizon; {entry['trials_helped']} trials asked for help; smallest "
+                       f"weighted lambda2 {entry['min_lambda2_weighted']:.2g} (N = "
+                       f"{low.get('n_robots')}, seed {low.get('seed')}); "
+                       f"{entry['collisions']} collisions.")  # fmt: skip
         out.append("")
     scenes = result["scenes"].values()
     trials = sum(e["trials"] for e in scenes)

@@ -1,7 +1,7 @@
 """Where the time of the 35-robot connectivity step goes (free 3-D space or the town).
 
 The step of ``bench_continuous_step.bench`` (``compute_weights(guess=nu)``, the cached
-eigenpair, ``exact_force``, the numpy Euler update) and its parts, CPU time per call
+eigenpair, ``exact_force``, the Euler update) and its parts, CPU time per call
 (means of ``--repeat`` calls after one untimed call): the compiled work of each kernel
 alone (timed by a loop inside numba, no Python or argument conversion) and each Python
 call around it. ``TETHER_JIT=on``; warm numba's cache first
@@ -150,7 +150,7 @@ def main() -> None:
         lambda: graph.fiedler(guess=nu), r
     )
     rows["exact_force"] = per_call(lambda: exact_force(fused, lam2, vec, c), r)
-    rows["semi_implicit_euler (numpy)"] = per_call(
+    rows["semi_implicit_euler (compiled with the kernels on)"] = per_call(
         lambda: semi_implicit_euler(q, v, q + ext, 1e-3, p.mass_kg, p.damping_ns_per_m), r
     )
     print(f"{a.world}, 35 robots, {len(graph.pairs)} links, load {os.getloadavg()[0]:.1f}")

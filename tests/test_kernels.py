@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from _clearance_helpers import box_world, brute
 from tether import jit
 from tether.continuous.gradient import connectivity_force, edge_energy, lambda2_gradient, messages
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.tracking import PathSet, TrackedPath
 from tether.continuous.weights import compute_weights
-from tether.geometry import point_segment_distance
 from tether.graph import fiedler, laplacian_dense, pairs_within
 from tether.paths.bspline import SplinePath
 from tether.world.clearance import ObstacleIndex
@@ -28,17 +28,6 @@ pytest.importorskip("numba")
 PARAMS = ConnectivityParams()
 GRAPH_FIELDS = ("pairs", "pair_factor", "dP_di", "dP_dj", "clearance_m", "collision",
                 "coll_pairs", "coll_unit", "coll_logd")  # fmt: skip
-
-
-def box_world(rng: np.random.Generator, dim: int = 3) -> World:
-    """20 x 20 (x 8) m at 0.5 m with random boxes."""
-    shape = (40, 40, 16)[:dim]
-    occ = np.zeros(shape, dtype=bool)
-    for _ in range(6):
-        lo = rng.integers(0, np.array(shape) - 6)
-        size = rng.integers(2, 7, size=dim)
-        occ[tuple(slice(a, a + s) for a, s in zip(lo, size, strict=True))] = True
-    return World(dim=dim, grid=OccupancyGrid(occ, 0.5, np.zeros(dim)))
 
 
 def both(fn, *args, **kwargs):  # noqa: ANN001, ANN201
@@ -54,14 +43,6 @@ def assert_same(a, b) -> None:  # noqa: ANN001
     a, b = np.asarray(a), np.asarray(b)
     assert a.shape == b.shape and a.dtype == b.dtype
     np.testing.assert_array_equal(a, b)
-
-
-def brute(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.array([
-        point_segment_distance(points, np.repeat(a[k : k + 1], len(points), 0),
-                               np.repeat(b[k : k + 1], len(points), 0)).min()
-        for k in range(len(a))
-    ])  # fmt: skip
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -166,7 +166,7 @@ def no_obstacles(dim: int) -> tuple:
     """
     i, f1, f2 = np.zeros(0, np.int64), np.zeros(0), np.zeros((0, dim))
     tree = (f2, i, f2, f2, i, i, i, f2, f1)
-    table = (np.full(2, -1, np.int64), f1, f2, f2, i, i, i, i, f2, np.zeros(1, np.int64))
+    table = (np.full(2, -1, np.int64), f1, f2, f2, i, i, i, i, i, f2, np.zeros(2, np.int64))
     return f2, tree, table, 0, (f1, i, i, np.zeros(dim), 1.0, 0.0)
 
 
@@ -205,11 +205,24 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
                 b[k] = q[pairs[k, 1]]
                 keys[k] = pairs[k, 0] * n + pairs[k, 1]
             spts, perm, lo, hi, child, start, end, cen, rad = tree
-            t_keys, t_bound, t_a, t_b, t_seed, t_first, t_count, pool, pool_x, pool_used = table
+            (
+                t_keys,
+                t_bound,
+                t_a,
+                t_b,
+                t_seed,
+                t_first,
+                t_count,
+                t_epoch,
+                pool,
+                pool_x,
+                pool_used,
+            ) = table
             f_flat, f_strides, f_shape, f_origin, f_res, f_margin = field
             clear, s_star, which, added = segments_nearest_cached(
                 spts, perm, lo, hi, child, start, end, cen, rad, a, b, ro_outer, keys, slack,
-                t_keys, t_bound, t_a, t_b, t_seed, t_first, t_count, pool, pool_x, pool_used,
+                t_keys, t_bound, t_a, t_b, t_seed, t_first, t_count, t_epoch, pool, pool_x,
+                pool_used,
                 f_flat, f_strides, f_shape, f_origin, f_res, f_margin, order,
             )  # fmt: skip
             o_star = np.zeros((m, dim))

@@ -11,7 +11,9 @@ here is plain arrays and sparse matrices, so that 10,000-robot teams stay cheap.
 * :mod:`tether.graph.warm` -- the certified warm-started solver for large teams,
   on :mod:`tether.graph.links` (a Laplacian kept as its links);
 * :mod:`tether.graph.small` -- the certified warm-started dense solver for teams of
-  17-400 robots (compiled in :mod:`tether.graph.small_kernels`, same bits).
+  17-400 robots (compiled in :mod:`tether.graph.small_kernels`, same bits);
+* :mod:`tether.graph.steinlib` -- a strict reader of SteinLib's STP files (Steiner
+  problems in graphs, as ``networkx`` graphs; not imported here).
 """
 
 from tether.graph.fiedler import DENSE_MAX_N, SUBSET_MAX_N, algebraic_connectivity, fiedler

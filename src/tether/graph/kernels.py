@@ -73,30 +73,32 @@ def pairs_within_kernel(q, r):  # noqa: ANN001, ANN201
     tests squared distances summed in coordinate order against ``r * r`` the same
     way); all pairs are tested (teams of up to a few hundred robots).
     """
-    n, dim = q.shape
+    n = q.shape[0]
     r2 = r * r
     # two passes, count then fill: an output array that may be replaced inside the loop
     # costs a reference count per pair (2-3x the loop)
     m = 0
     for i in range(n):
         for j in range(i + 1, n):
-            sq = 0.0
-            for d in range(dim):
-                x = q[i, d] - q[j, d]
-                sq += x * x
-            m += sq <= r2
+            m += _sq_dist(q, i, j) <= r2
     out = np.empty((m, 2), np.int64)
     m = 0
     for i in range(n):
         for j in range(i + 1, n):
-            sq = 0.0
-            for d in range(dim):
-                x = q[i, d] - q[j, d]
-                sq += x * x
-            if sq <= r2:
+            if _sq_dist(q, i, j) <= r2:
                 out[m, 0], out[m, 1] = i, j
                 m += 1
     return out
+
+
+@njit(cache=True, inline="always")
+def _sq_dist(q, i, j):  # noqa: ANN001, ANN202
+    """``sum_d (q_i - q_j)_d^2``, summed in coordinate order."""
+    sq = 0.0
+    for d in range(q.shape[1]):
+        x = q[i, d] - q[j, d]
+        sq += x * x
+    return sq
 
 
 @njit(cache=True)

@@ -377,26 +377,29 @@ class ObstacleIndex:
 
     #: candidate-list slots of the kernel's table per key slot
     LIST_SLOTS_PER_KEY = 16
+    #: at most this many candidate-list entries (8 MB in 3-D); a full pool is emptied and
+    #: refilled by the kernel, so a large team only loses the shortcut, not memory
+    LIST_SLOTS_MAX = 1 << 18
 
     def _kernel_table(self, n_keys: int) -> tuple[np.ndarray, ...]:
         """The kernel's cache table, emptied and enlarged when it would be over half full.
 
         Keys, bounds, segment endpoints, seeds, then the candidate lists: each slot's
-        first list entry and count (-1: none), the pool of entries, their coordinates and
-        the pool's fill.
+        first list entry, count (-1: none) and epoch, the pool of entries, their coordinates
+        and the pool's fill and epoch.
         """
         cap = 0 if self._ktable is None else len(self._ktable[0])
         if self._ktable_used + n_keys > cap // 2:
             cap = 64
             while cap < 4 * n_keys:
                 cap *= 2
+            slots = min(self.LIST_SLOTS_PER_KEY * cap, self.LIST_SLOTS_MAX)
             self._ktable = (np.full(cap, -1, dtype=np.int64), np.zeros(cap),
                             np.zeros((cap, self.dim)), np.zeros((cap, self.dim)),
                             np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
-                            np.full(cap, -1, dtype=np.int64),
-                            np.zeros(self.LIST_SLOTS_PER_KEY * cap, dtype=np.int64),
-                            np.zeros((self.LIST_SLOTS_PER_KEY * cap, self.dim)),
-                            np.zeros(1, dtype=np.int64))  # fmt: skip
+                            np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
+                            np.zeros(slots, dtype=np.int64), np.zeros((slots, self.dim)),
+                            np.zeros(2, dtype=np.int64))  # fmt: skip
             self._ktable_used = 0
         return self._ktable
 

@@ -34,6 +34,7 @@ from tether.world.clearance_kernels import (
     _field_clear,
     _node_gaps,
     _search,
+    closer,
     edot,
     point_sq,
 )
@@ -103,28 +104,17 @@ def _scan(perm, pool, pool_x, first, count, sa, ab, den, reach, order):  # noqa:
         sq, s = point_sq(pool_x, k, sa, ab, den, order)  # pool_x[k] is spts[pool[k]]
         if sq > best2:
             continue  # sqrt(sq) > best: neither closer nor tied
-        dd = math.sqrt(sq)
         e = pool[k]
-        p = perm[e]
-        if dd < best or (best_i >= 0 and dd == best and p < best_i):
-            best, best_s, best_i, best_e = dd, s, p, e
-            best2 = best * best * (1.0 + 1e-12)
+        best, best_s, best_i, best_e = closer(sq, s, perm[e], e, best, best_s, best_i, best_e)
+        best2 = best * best * (1.0 + 1e-12)
     return best, best_s, best_i, best_e
-
-
-@njit(cache=True)
-def _drop_lists(table_count, pool_used):  # noqa: ANN001, ANN202
-    """Forget every candidate list (the pool starts again from its first slot)."""
-    for h in range(len(table_count)):
-        table_count[h] = -1
-    pool_used[0] = 0
 
 
 @njit(cache=True)
 def segments_nearest_cached(  # noqa: ANN201, PLR0913
     spts, perm, lo, hi, child, start, end, cen, rad, a, b, within, keys, slack,
-    table_keys, table_bound, table_a, table_b, table_seed, table_first, table_count, pool,
-    pool_x, pool_used, field, strides, shape, origin, res, margin, order,
+    table_keys, table_bound, table_a, table_b, table_seed, table_first, table_count,
+    table_epoch, pool, pool_x, pool_used, field, strides, shape, origin, res, margin, order,
 ):  # noqa: ANN001  # fmt: skip
     """:func:`~tether.world.clearance_kernels.segments_nearest` with a cache per segment key
     (same results).
@@ -134,7 +124,9 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
     clearance, the closest point found (``table_seed``, its position in ``spts``, -1 if
     none) and, for a segment nearer than ``within``, its candidate list
     (``pool[table_first:table_first + table_count]``, the points' coordinates in the same
-    rows of ``pool_x``; ``table_count = -1``: none; ``pool_used[0]`` slots are taken; an
+    rows of ``pool_x``; ``table_count = -1``: none; a list is valid while its
+    ``table_epoch`` is the pool's, ``pool_used[1]``; ``pool_used[0]`` slots are taken; a
+    full pool starts again from its first slot in a new epoch, in O(1); an
     empty pool: no lists). A segment whose ``bound - move`` is
     at or above ``within`` is settled; one with a list and ``move <= slack`` is scanned
     over its list; any other is checked against ``within + slack`` (field, then the
@@ -170,7 +162,8 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
             move = math.sqrt(max(move_a, move_b))
             if table_bound[h] - move >= within:
                 continue  # settled: the entry keeps its old segment and bound
-            if table_count[h] >= 0 and move <= slack:  # the list still holds the answer
+            listed = table_count[h] >= 0 and table_epoch[h] == pool_used[1]
+            if listed and move <= slack:  # the list still holds the answer
                 d_k, s_k, p_k, e_k = _scan(perm, pool, pool_x, table_first[h],
                                            table_count[h], sa, ab, den, reach, order)  # fmt: skip
                 if p_k >= 0:
@@ -204,11 +197,13 @@ def segments_nearest_cached(  # noqa: ANN201, PLR0913
             got = _collect(spts, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, radius,
                            order, stack, pool, pool_x, pool_used[0])  # fmt: skip
             if got < 0:  # the pool is full: start it again (lists are only a shortcut)
-                _drop_lists(table_count, pool_used)
+                pool_used[0] = 0  # every list made before is void: a new epoch
+                pool_used[1] += 1
                 got = _collect(spts, lo, hi, child, start, end, cen, rad, sa, sb, ab, den,
                                radius, order, stack, pool, pool_x, 0)  # fmt: skip
             if got >= 0:
                 table_first[h] = pool_used[0]
                 table_count[h] = got
+                table_epoch[h] = pool_used[1]
                 pool_used[0] += got
     return dist, param, which, added

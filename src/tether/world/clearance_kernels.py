@@ -136,6 +136,17 @@ def point_sq(spts, e, sa, ab, den, order):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True, inline="always")
+def closer(sq, s, p, e, best, best_s, best_i, best_e):  # noqa: ANN001, ANN201, PLR0913
+    """The nearest point so far, after one whose squared distance ``sq`` did not rule it
+    out (parameter ``s``, index ``p``, position ``e``): ``(d, s, index, position)``, ties to
+    the lowest index."""
+    dd = math.sqrt(sq)
+    if dd < best or (best_i >= 0 and dd == best and p < best_i):
+        return dd, s, p, e
+    return best, best_s, best_i, best_e
+
+
+@njit(cache=True, inline="always")
 def _node_gaps(sa, sb, ab, den, lo, hi, cen, node):  # noqa: ANN001, ANN202
     """Squared lower-bound ingredients of the distance from a segment to ``node``'s points.
 
@@ -266,11 +277,8 @@ def _search(spts, perm, lo, hi, child, start, end, cen, rad, sa, sb, ab, den, re
             sq, s = point_sq(spts, e, sa, ab, den, order)
             if sq > best2:
                 continue  # sqrt(sq) > best: neither closer nor tied
-            dd = math.sqrt(sq)
-            p = perm[e]
-            if dd < best or (best_i >= 0 and dd == best and p < best_i):
-                best, best_s, best_i, best_e = dd, s, p, e
-                best2 = best * best * (1.0 + 1e-12)
+            best, best_s, best_i, best_e = closer(sq, s, perm[e], e, best, best_s, best_i, best_e)
+            best2 = best * best * (1.0 + 1e-12)
     return best, best_s, best_i, best_e
 
 
