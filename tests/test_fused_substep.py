@@ -49,6 +49,9 @@ def test_fused_weights_eigenpair_and_force_equal_the_chain(scene: str, method: s
             ref = compute_weights(q2, PARAMS, obs)
             ref_lam, ref_vec = ref.fiedler(guess=nu, method=method)
             ref_force = exact_force(ref, ref_lam, ref_vec, PARAMS)
+        for name in ("pairs", "pair_factor", "dP_di", "dP_dj", "clearance_m", "collision",
+                     "coll_pairs", "coll_unit", "coll_logd", "weights"):  # fmt: skip
+            assert np.array_equal(getattr(fused, name), getattr(ref, name)), name
         assert lam == chain[0] == ref_lam
         assert np.array_equal(vec, chain[1]) and np.array_equal(vec, ref_vec)
         assert np.array_equal(force, force_chain) and np.array_equal(force, ref_force)

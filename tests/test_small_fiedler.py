@@ -212,6 +212,7 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
     fiedler_module = importlib.import_module("tether.graph.fiedler")  # not the function
     calls = {"small": 0}
     original_small, original_fused = fiedler_module._small, kernels.evaluate_fiedler_kernel
+    original_free = kernels.evaluate_fiedler_free_kernel
 
     def counting_small(*args):  # noqa: ANN002, ANN202
         calls["small"] += 1
@@ -221,9 +222,13 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
         calls["small"] += not args[16]  # lapack=False: the small solver first
         return original_fused(*args)
 
+    def counting_free(*args):  # noqa: ANN002, ANN202
+        calls["small"] += not args[8]  # the same without obstacles
+        return original_free(*args)
+
     monkeypatch.setattr(fiedler_module, "_small", counting_small)
-    monkeypatch.setattr(weights, "_kernels", lambda: (kernels.evaluate_kernel, counting_fused,
-                                                      kernels.no_obstacles))  # fmt: skip
+    counted = (kernels.evaluate_kernel, counting_fused, counting_free, kernels.no_obstacles)
+    monkeypatch.setattr(weights, "_kernels", lambda: counted)
     sc = load_scenario("multi_target_empty")
     sc.team.n_robots = 20
     sc.strategy.params["fiedler_method"] = method

@@ -227,12 +227,13 @@ _NO_CLEARANCE = (np.zeros(0), np.zeros(0), np.zeros((0, 3)))
 
 @cache
 def _kernels() -> tuple:
-    """``evaluate_kernel``, ``evaluate_fiedler_kernel`` and ``no_obstacles``, imported
-    on first use (numba only when kernels run; an import statement in the hot function
-    costs microseconds per call)."""
-    from tether.continuous.kernels import evaluate_fiedler_kernel, evaluate_kernel, no_obstacles
+    """``evaluate_kernel``, ``evaluate_fiedler_kernel``, ``evaluate_fiedler_free_kernel``
+    and ``no_obstacles``, imported on first use (numba only when kernels run; an import
+    statement in the hot function costs microseconds per call)."""
+    from tether.continuous import kernels as k
 
-    return evaluate_kernel, evaluate_fiedler_kernel, no_obstacles
+    return k.evaluate_kernel, k.evaluate_fiedler_kernel, k.evaluate_fiedler_free_kernel, \
+        k.no_obstacles  # fmt: skip
 
 
 def _evaluate_kernel(
@@ -245,7 +246,8 @@ def _evaluate_kernel(
 ) -> WeightedGraph:
     """Pairs, clearance, weights, ``W``, the dense Laplacian (and with ``guess`` the
     eigenpair, with ``with_force`` the force) in one kernel call."""
-    evaluate_kernel, evaluate_fiedler_kernel, no_obstacles = _kernels()
+    evaluate_kernel, evaluate_fiedler_kernel, evaluate_fiedler_free_kernel, no_obstacles = \
+        _kernels()  # fmt: skip
     q = np.ascontiguousarray(q)
     n, dim = q.shape
     has = obstacles is not None and obstacles.tree is not None and n > 1
@@ -263,16 +265,21 @@ def _evaluate_kernel(
     for _ in range(2):
         points, tree, table, used, fld = obstacles.kernel_state(estimate) if has else \
             no_obstacles(dim)  # fmt: skip
-        if fused:
+        if not fused:
+            out = evaluate_kernel(q, *radii, n <= SUBSET_MAX_N, has, points, tree, table, used,
+                                  slack, fld, einsum_order())  # fmt: skip
+        elif has:
             out, (decided, lam, vec, _), force = evaluate_fiedler_kernel(
                 q, *radii, has, points, tree, table, used, slack, fld, einsum_order(), guess_c,
                 method == "lapack", small.SETTINGS, lwork, liwork, potential, with_force,
             )  # fmt: skip
-            if decided:
-                eigen = (guess, method, lam, vec, potential, force if with_force else None)
-        else:
-            out = evaluate_kernel(q, *radii, n <= SUBSET_MAX_N, has, points, tree, table, used,
-                                  slack, fld, einsum_order())  # fmt: skip
+        else:  # the same call without an obstacle state to pass
+            out, (decided, lam, vec, _), force = evaluate_fiedler_free_kernel(
+                q, *radii, guess_c, method == "lapack", small.SETTINGS, lwork, liwork,
+                potential, with_force,
+            )  # fmt: skip
+        if fused and decided:
+            eigen = (guess, method, lam, vec, potential, force if with_force else None)
         if out[-1] >= 0:
             break
         estimate = len(out[8])

@@ -1,0 +1,40 @@
+"""Compiled smooth steps of :mod:`tether.continuous.potential` (numba, lazy).
+
+``S(x; lo, hi)`` with its derivative (:func:`smooth_step1`) and its log-derivative
+(:func:`log_derivative1`), one value at a time, with the arithmetic of the numpy
+reference in the same order (``scipy.special.expit(x)`` is ``1 / (1 + exp(-x))``), so
+the same bits; the kernels of :mod:`tether.continuous.kernels` build the weights of
+App. A from them. (Over a whole array in phases, divisions first and each ``exp`` in
+its own loop, they were no faster for 200 links: the scalar loop already overlaps.)
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def smooth_step1(x, lo, hi):  # noqa: ANN001, ANN202
+    """``(S(x; lo, hi), dS/dx)`` of :func:`tether.continuous.potential.smooth_step`."""
+    width = hi - lo
+    t = (x - lo) / width
+    if t > 0.0 and t < 1.0:
+        g = 1.0 / t - 1.0 / (1.0 - t)
+        s_in = 1.0 / (1.0 + math.exp(g))  # expit(-g)
+        e_g = 1.0 / (1.0 + math.exp(-g))  # expit(g)
+        ds = s_in * e_g * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
+        return s_in, ds
+    return (1.0 if t >= 1.0 else 0.0), 0.0
+
+
+@njit(cache=True, inline="always")
+def log_derivative1(x, lo, hi):  # noqa: ANN001, ANN202
+    """``S'(x) / S(x)`` of :func:`tether.continuous.potential.smooth_step_log_derivative`."""
+    width = hi - lo
+    t = (x - lo) / width
+    if t > 0.0 and t < 1.0:
+        g = 1.0 / t - 1.0 / (1.0 - t)
+        return 1.0 / (1.0 + math.exp(-g)) * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
+    return 0.0
