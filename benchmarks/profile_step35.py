@@ -30,7 +30,8 @@ import bench_continuous_step as bcs  # noqa: E402
 from tether.continuous.dynamics import semi_implicit_euler  # noqa: E402
 from tether.continuous.gradient import exact_force  # noqa: E402
 from tether.continuous.kernels import (  # noqa: E402
-    evaluate_fiedler_kernel,  # noqa: E402
+    evaluate_fiedler_free_kernel,
+    evaluate_fiedler_kernel,
     evaluate_kernel,
     no_obstacles,
     pairs_in_range,
@@ -132,7 +133,10 @@ def main() -> None:
         args = (q, *radii, False, *st[:4], 0.0, st[4], einsum_order())
         pot = (c.lambda2_min, c.lambda2_null, c.potential_gain)
         fused_args = (*args, nu, False, small.SETTINGS, *_syevr_lwork(35), pot, True)
-        rows["  evaluate_fiedler_kernel call (+ eigenpair, force)"] = per_call(
+        rows["  evaluate_fiedler_free_kernel call (+ eigenpair, force)"] = per_call(
+            lambda: evaluate_fiedler_free_kernel(q, *radii, *fused_args[len(args) :]), r
+        )
+        rows["  the same through evaluate_fiedler_kernel (empty obstacle state)"] = per_call(
             lambda: evaluate_fiedler_kernel(*fused_args), r
         )
         rows["  evaluate_kernel call (no eigenpair)"] = per_call(
