@@ -190,3 +190,29 @@ def test_book_rejects_bad_targets() -> None:
         book.add(0, [0, np.nan, 0])
     with pytest.raises(ValueError, match="stay_s"):
         book.add(0, [0, 0, 0], stay_s=-1)
+
+
+@pytest.mark.parametrize("replan_s", [20.0, None])
+def test_a_stalled_prime_plans_its_path_again_from_where_it_is(replan_s: float | None) -> None:
+    """``replan_stalled_s``: a prime whose path has not shrunk plans again from its position
+    every ``replan_stalled_s``; the stall clock runs on, so the watchdog still drops it."""
+    built = build(scenario_from_dict(scenario(0, replan_stalled_s=replan_s), "x.yaml"))
+    strat: MultiTargetStrategy = built.strategy
+    strat.reset(built.world, built.initial, built.rng)
+    pl = strat.planner
+    i = int(np.flatnonzero([p is not None for p in pl.path])[0])
+    pl.set_role(i, PRIME, 0.0)
+    q = built.initial.positions.copy()
+    q[i] += 0.5  # pushed off its path's start, and it stays there: no progress
+    strat.drain_events()
+    replans, dropped = [], None
+    for k in range(700):
+        pl.update(q, k / 10)
+        for e in strat.drain_events():
+            if e.get("robot") == i and e["kind"] == "replan":
+                replans.append(e["t_s"])
+                assert np.allclose(pl.path[i].points[0], q[i])  # from where it is
+            if e.get("robot") == i and e["kind"] == "target_dropped":
+                dropped = (e["t_s"], e["reason"])
+    assert dropped is not None and dropped[1] == "stalled" and 60.0 < dropped[0] < 60.2
+    assert replans == ([] if replan_s is None else [20.0, 40.0, 60.0])

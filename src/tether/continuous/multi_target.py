@@ -254,6 +254,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
             world, self.targets, r_grid_m=p.r_grid_m, rz_m=p.rz_m,
             inflate_m=p.inflate_m or 0.5 * (p.ro_m + p.ro_outer_m),
             r_gamma_m=p.r_gamma_m or p.rz_m, stall_timeout_s=p.stall_timeout_s, emit=self.emit,
+            replan_stalled_s=p.replan_stalled_s,
         )  # fmt: skip
         self.planner.start_up(state.positions)
         self.filter: ReferenceFilter | None = None  # made at the first step (it needs dt)

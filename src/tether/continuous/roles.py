@@ -49,6 +49,11 @@ class RolePlanner:
     stall_timeout_s
         A prime traveler whose remaining path has not shrunk by ``r_grid_m`` for
         this long drops its target (``None``: never).
+    replan_stalled_s
+        A prime traveler whose remaining path has not shrunk by ``r_grid_m`` for
+        this long plans its path again from where it is, and again after each further
+        ``replan_stalled_s`` without progress (``None``: never; line 18 of Algorithm 1,
+        which the paper applies to secondary travelers only).
     emit
         ``emit(kind, robot, **data)`` records an event.
     """
@@ -64,6 +69,7 @@ class RolePlanner:
         r_gamma_m: float,
         stall_timeout_s: float | None,
         emit: Emit,
+        replan_stalled_s: float | None = None,
     ) -> None:
         n = len(book.queues)
         self.world = world
@@ -73,6 +79,7 @@ class RolePlanner:
         self.r_gamma_m = r_gamma_m
         self.inflate_m = inflate_m
         self.stall_timeout_s = stall_timeout_s
+        self.replan_stalled_s = replan_stalled_s
         self.emit = emit
         self.role = np.full(n, CONNECTOR)
         self.target: list[Target | None] = [None] * n  # written only through _assign
@@ -88,6 +95,7 @@ class RolePlanner:
         self.replans = 0
         self.progress = np.full(n, np.inf)  # the prime's best remaining length so far
         self.progress_at = np.full(n, np.nan)  # ... and when it last shrank by r_grid_m
+        self.replanned_at = np.full(n, np.nan)  # the prime's last replan while stalled
         self._planning = None
         if world.grid is not None:
             self._planning = planning_grid(world, cell_m=r_grid_m, inflate_m=inflate_m)
@@ -119,6 +127,7 @@ class RolePlanner:
     def set_role(self, robot: int, role: int, t_s: float) -> None:
         if role == PRIME:  # a new prime starts its progress watch
             self.progress[robot], self.progress_at[robot] = np.inf, np.nan
+            self.replanned_at[robot] = np.nan
         if self.role[robot] != role:
             self.emit("role", robot, t_s=t_s, old=ROLE_NAMES[self.role[robot]],
                       new=ROLE_NAMES[role])  # fmt: skip
@@ -196,7 +205,7 @@ class RolePlanner:
         """Algorithm 1 for every robot; returns who wants a prime election (line 14)."""
         dist = self.distance_to_target(q)
         off_path, remaining = self.on_path(q)
-        self._watch(remaining, t_s)
+        self._watch(remaining, t_s, q)
         wants = np.zeros(len(q), dtype=bool)
         # Python scalars for the loop (the same float64 values): robot i's iteration
         # changes only robot i's role, distance and times, read before it starts
@@ -232,8 +241,8 @@ class RolePlanner:
                 self.set_role(i, CONNECTOR, t_s)
         return wants
 
-    def _watch(self, remaining: np.ndarray, t_s: float) -> None:
-        """The prime's progress watchdog: drop a target it cannot get closer to."""
+    def _watch(self, remaining: np.ndarray, t_s: float, q: np.ndarray) -> None:
+        """The prime's progress watchdog: replan, then drop, a target it cannot get closer to."""
         for i in np.flatnonzero(self.role == PRIME):
             if not np.isfinite(remaining[i]):
                 continue
@@ -242,6 +251,25 @@ class RolePlanner:
             elif self.stall_timeout_s is not None and \
                     t_s - self.progress_at[i] > self.stall_timeout_s:  # fmt: skip
                 self.drop(i, t_s, "stalled")
+            elif (
+                self.replan_stalled_s is not None
+                and t_s - np.fmax(self.progress_at[i], self.replanned_at[i])
+                >= self.replan_stalled_s - 1e-9
+            ):
+                self._replan_stalled(i, q[i], t_s)
+
+    def _replan_stalled(self, i: int, q: np.ndarray, t_s: float) -> None:
+        """A stalled prime's path again from ``q`` (its old one may start behind it or
+        pass a door it was pushed past); progress is then measured on the new path, the
+        stall clock runs on (only progress resets it)."""
+        self.replanned_at[i] = t_s
+        new = self.plan(i, q)
+        if new is None:
+            return  # keep the old path; the watchdog drops the target if it stays stalled
+        self.set_path(i, new)
+        self.replans += 1
+        self.progress[i] = new.length_m
+        self.emit("replan", i, t_s=t_s, path_m=round(new.length_m, 3))
 
     def stalled_s(self, robot: int, t_s: float) -> float:
         """Time the prime ``robot`` has not shrunk its path by ``Rgrid`` (0: not a prime)."""
