@@ -76,7 +76,8 @@ def main() -> None:
                 merged.update(row)
             else:  # a later run: its old tree is main at that time, its new the branch
                 merged.update({k: v for k, v in row.items() if not k.startswith("old")})
-                merged["main"], merged["main_extra"] = row["old"], row.get("old_extra")
+                if "old" in row:  # (a row the old tree cannot run keeps the main before)
+                    merged["main"], merged["main_extra"] = row["old"], row.get("old_extra")
             rows[key] = merged
             source[key] = len(notes)
     print("| work | goal | old (4cef8e4) | before (the run's old tree) | new | met? | run |")

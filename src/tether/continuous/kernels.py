@@ -66,7 +66,7 @@ def weights_kernel(  # noqa: ANN201, PLR0913
     da = np.empty(m)
     for k in range(m):
         i, j = pairs[k, 0], pairs[k, 1]
-        if dim == 3:  # row_norm's sum unrolled (a third of the generic loop's time)
+        if dim == 3:  # row_norm's sum unrolled, the same order (faster than the loop over dim)
             x0, x1, x2 = q[i, 0] - q[j, 0], q[i, 1] - q[j, 1], q[i, 2] - q[j, 2]
             dk = math.sqrt((x0 * x0 + x1 * x1) + x2 * x2)
             den = max(dk, 1e-300)
