@@ -135,3 +135,27 @@ def test_kernel_and_reference_agree(seed: int, kernel_mode: bool) -> None:
     else:
         assert fast == pytest.approx(ref, rel=1e-12, abs=1e-12)
     assert_valid_tree(g, tree, terminals, fast)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_edge_lists_follow_networkx_edge_order(seed: int) -> None:
+    """The kernel's edge lists are the component's edges in networkx's edge-view order
+    (the CSR, hence Dijkstra's ties and which optimal tree is returned, depend on it):
+    a whole graph with self-loops and string labels, and one of two components."""
+    from tether.recurrent.planning.steiner import _edge_lists
+
+    rng = np.random.default_rng(seed)
+    g = nx.connected_watts_strogatz_graph(40, 4, 0.3, seed=seed)
+    g = nx.relabel_nodes(g, {v: f"n{(v * 7) % 40}" for v in g})  # adjacency order != labels
+    for u, v in g.edges:
+        g.edges[u, v]["weight"] = float(rng.integers(1, 9))
+    g.add_edge("n3", "n3", weight=1.0)
+    two = nx.disjoint_union(g, nx.cycle_graph(5))
+    for graph, start in ((g, "n0"), (two, 0)):
+        nodes = list(nx.node_connected_component(graph, start))
+        index = {v: i for i, v in enumerate(nodes)}
+        expected = [(index[u], index[v], w)
+                    for u, v, w in graph.subgraph(nodes).edges(data="weight", default=1.0)
+                    if u != v]  # fmt: skip
+        us, vs, ws = _edge_lists(graph, nodes, index, "weight")
+        assert list(zip(us, vs, ws, strict=True)) == expected

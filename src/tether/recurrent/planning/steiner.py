@@ -123,16 +123,15 @@ def _steiner_tree_kernel(
     from tether.recurrent.planning.steiner_kernels import steiner_kernel, tree_edges
 
     n = len(nodes)
-    sub = graph.subgraph(nodes) if n < graph.number_of_nodes() else graph
-    ends = [(index[u], index[v], w) for u, v, w in sub.edges(data=weight, default=1.0) if u != v]
-    arr = np.array(ends, dtype=float).reshape(-1, 3)
-    w = arr[:, 2]
+    us, vs, ws = _edge_lists(graph, nodes, index, weight)
+    w = np.array(ws, dtype=float)
     bad = (w < 0) | ~np.isfinite(w)
     if bad.any():
-        a, b, wb = ends[int(np.flatnonzero(bad)[0])]
-        raise ValueError(f"edge ({nodes[a]!r}, {nodes[b]!r}) has invalid weight {wb}")
-    src = np.concatenate([arr[:, 0], arr[:, 1]]).astype(np.int64)
-    dst = np.concatenate([arr[:, 1], arr[:, 0]]).astype(np.int64)
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"edge ({nodes[us[k]]!r}, {nodes[vs[k]]!r}) has invalid weight {ws[k]}")
+    ui, vi = np.array(us, dtype=np.int64), np.array(vs, dtype=np.int64)
+    src = np.concatenate([ui, vi])
+    dst = np.concatenate([vi, ui])
     order = np.argsort(src, kind="stable")
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
@@ -141,6 +140,36 @@ def _steiner_tree_kernel(
     edges = tree_edges(pred, split, int(term_idx[-1]), (1 << (len(terms) - 1)) - 1)
     tree = _as_tree(graph, [(nodes[a], nodes[b]) for a, b in edges.tolist()], terms, weight)
     return SteinerTree(float(cost), tree)
+
+
+def _edge_lists(
+    graph: nx.Graph, nodes: list, index: dict, weight: str
+) -> tuple[list[int], list[int], list]:
+    """The component's edges as three lists (indices of both ends, weight), each edge once
+    and in the order of ``graph.subgraph(nodes).edges(data=weight, default=1.0)``
+    (networkx's edge view: nodes in adjacency order, each edge from the end met first),
+    self-loops left out. For a whole simple graph the adjacency dicts are read directly
+    (``Graph.adjacency``), the same order without the view's generator."""
+    us: list[int] = []
+    vs: list[int] = []
+    ws: list = []
+    if len(nodes) < graph.number_of_nodes() or graph.is_multigraph():
+        for u, v, w in graph.subgraph(nodes).edges(data=weight, default=1.0):
+            if u != v:
+                us.append(index[u])
+                vs.append(index[v])
+                ws.append(w)
+        return us, vs, ws
+    seen: set = set()
+    for u, nbrs in graph.adjacency():
+        iu = index[u]
+        for v, data in nbrs.items():
+            if v not in seen and v != u:
+                us.append(iu)
+                vs.append(index[v])
+                ws.append(data.get(weight, 1.0))
+        seen.add(u)
+    return us, vs, ws
 
 
 def all_pairs(
