@@ -159,3 +159,24 @@ def test_edge_lists_follow_networkx_edge_order(seed: int) -> None:
                     if u != v]  # fmt: skip
         us, vs, ws = _edge_lists(graph, nodes, index, "weight")
         assert list(zip(us, vs, ws, strict=True)) == expected
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_spanning_tree_shortcut_is_networkx_mst(seed: int) -> None:
+    """``_spanning_tree`` gives networkx's Kruskal tree exactly (nodes, edges, their order
+    and data) for trees with tied weights, for graphs with a cycle and for a forest."""
+    from tether.recurrent.planning.steiner import _spanning_tree
+
+    rng = np.random.default_rng(seed)
+    tree = nx.random_labeled_tree(12, seed=seed)
+    cyclic = tree.copy()
+    cyclic.add_edge(0, 11)
+    forest = nx.disjoint_union(tree, nx.path_graph(3))
+    for g in (tree, cyclic, forest):
+        for u, v in g.edges:
+            g.edges[u, v]["weight"] = int(rng.integers(1, 4))  # ties
+            g.edges[u, v]["id"] = (u, v)
+        ours, theirs = _spanning_tree(g, "weight"), nx.minimum_spanning_tree(g, weight="weight")
+        assert list(ours.nodes(data=True)) == list(theirs.nodes(data=True))
+        assert list(ours.edges(data=True)) == list(theirs.edges(data=True))
+        assert {v: list(ours.adj[v]) for v in ours} == {v: list(theirs.adj[v]) for v in theirs}

@@ -292,7 +292,7 @@ def _as_tree(
         sub.add_edge(a, b, **graph.edges[a, b])
         sub.nodes[a].update(graph.nodes[a])
         sub.nodes[b].update(graph.nodes[b])
-    tree = nx.minimum_spanning_tree(sub, weight=weight)
+    tree = _spanning_tree(sub, weight)
     term = set(terminals)
     leaves = [v for v in tree if tree.degree(v) <= 1 and v not in term]
     while leaves:
@@ -300,4 +300,20 @@ def _as_tree(
         nbrs = list(tree.neighbors(v))
         tree.remove_node(v)
         leaves.extend(u for u in nbrs if tree.degree(u) <= 1 and u not in term)
+    return tree
+
+
+def _spanning_tree(sub: nx.Graph, weight: str) -> nx.Graph:
+    """``networkx.minimum_spanning_tree(sub, weight=weight)`` (Kruskal), the same graph.
+
+    The union of shortest paths is usually a tree already; then Kruskal keeps every edge,
+    in the order it sorts them (by weight, stable), and that graph is made directly,
+    without the union-find and the dispatch (about 0.1 ms of a 2 ms call).
+    """
+    if sub.number_of_edges() != sub.number_of_nodes() - 1 or not nx.is_connected(sub):
+        return nx.minimum_spanning_tree(sub, weight=weight)
+    tree = nx.Graph()
+    tree.graph.update(sub.graph)
+    tree.add_nodes_from(sub.nodes.items())
+    tree.add_edges_from(sorted(sub.edges(data=True), key=lambda e: e[2].get(weight, 1)))
     return tree
