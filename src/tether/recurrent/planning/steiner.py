@@ -308,7 +308,7 @@ def _spanning_tree(sub: nx.Graph, weight: str) -> nx.Graph:
 
     The union of shortest paths is usually a tree already; then Kruskal keeps every edge,
     in the order it sorts them (by weight, stable), and that graph is made directly,
-    without the union-find and the dispatch (about 0.1 ms of a 2 ms call).
+    without the union-find and networkx's dispatch.
     """
     if sub.number_of_edges() != sub.number_of_nodes() - 1 or not nx.is_connected(sub):
         return nx.minimum_spanning_tree(sub, weight=weight)
