@@ -16,25 +16,37 @@ from numba import njit
 
 
 @njit(cache=True, inline="always")
-def smooth_step1(x, lo, hi):  # noqa: ANN001, ANN202
-    """``(S(x; lo, hi), dS/dx)`` of :func:`tether.continuous.potential.smooth_step`."""
+def _band(x, lo, hi):  # noqa: ANN001, ANN202
+    """``(inside, t, g, c, width)``: ``t = (x - lo) / width`` and, for ``0 < t < 1``,
+    ``g = 1/t - 1/(1 - t)`` and ``c = 1/t^2 + 1/(1 - t)^2`` (0 outside the band)."""
     width = hi - lo
     t = (x - lo) / width
     if t > 0.0 and t < 1.0:
-        g = 1.0 / t - 1.0 / (1.0 - t)
+        return (
+            True,
+            t,
+            1.0 / t - 1.0 / (1.0 - t),
+            1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t)),
+            width,
+        )
+    return False, t, 0.0, 0.0, width
+
+
+@njit(cache=True, inline="always")
+def smooth_step1(x, lo, hi):  # noqa: ANN001, ANN202
+    """``(S(x; lo, hi), dS/dx)`` of :func:`tether.continuous.potential.smooth_step`."""
+    inside, t, g, c, width = _band(x, lo, hi)
+    if inside:
         s_in = 1.0 / (1.0 + math.exp(g))  # expit(-g)
         e_g = 1.0 / (1.0 + math.exp(-g))  # expit(g)
-        ds = s_in * e_g * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
-        return s_in, ds
+        return s_in, s_in * e_g * c / width
     return (1.0 if t >= 1.0 else 0.0), 0.0
 
 
 @njit(cache=True, inline="always")
 def log_derivative1(x, lo, hi):  # noqa: ANN001, ANN202
     """``S'(x) / S(x)`` of :func:`tether.continuous.potential.smooth_step_log_derivative`."""
-    width = hi - lo
-    t = (x - lo) / width
-    if t > 0.0 and t < 1.0:
-        g = 1.0 / t - 1.0 / (1.0 - t)
-        return 1.0 / (1.0 + math.exp(-g)) * (1.0 / (t * t) + 1.0 / ((1.0 - t) * (1.0 - t))) / width
+    inside, _, g, c, width = _band(x, lo, hi)
+    if inside:
+        return 1.0 / (1.0 + math.exp(-g)) * c / width
     return 0.0
