@@ -263,21 +263,23 @@ def _evaluate_kernel(
         lwork, liwork = _syevr_lwork(n)
     eigen = None
     for _ in range(2):
-        points, tree, table, used, fld = obstacles.kernel_state(estimate) if has else \
-            no_obstacles(dim)  # fmt: skip
-        if not fused:
-            out = evaluate_kernel(q, *radii, n <= SUBSET_MAX_N, has, points, tree, table, used,
-                                  slack, fld, einsum_order())  # fmt: skip
-        elif has:
-            out, (decided, lam, vec, _), force = evaluate_fiedler_kernel(
-                q, *radii, has, points, tree, table, used, slack, fld, einsum_order(), guess_c,
-                method == "lapack", small.SETTINGS, lwork, liwork, potential, with_force,
-            )  # fmt: skip
-        else:  # the same call without an obstacle state to pass
+        if fused and not has:  # the fused call without an obstacle state to pass
             out, (decided, lam, vec, _), force = evaluate_fiedler_free_kernel(
                 q, *radii, guess_c, method == "lapack", small.SETTINGS, lwork, liwork,
                 potential, with_force,
             )  # fmt: skip
+        else:
+            points, tree, table, used, fld = obstacles.kernel_state(estimate) if has else \
+                no_obstacles(dim)  # fmt: skip
+            if fused:
+                out, (decided, lam, vec, _), force = evaluate_fiedler_kernel(
+                    q, *radii, has, points, tree, table, used, slack, fld, einsum_order(),
+                    guess_c, method == "lapack", small.SETTINGS, lwork, liwork, potential,
+                    with_force,
+                )  # fmt: skip
+            else:
+                out = evaluate_kernel(q, *radii, n <= SUBSET_MAX_N, has, points, tree, table,
+                                      used, slack, fld, einsum_order())  # fmt: skip
         if fused and decided:
             eigen = (guess, method, lam, vec, potential, force if with_force else None)
         if out[-1] >= 0:
