@@ -8,10 +8,14 @@ distance matrix: the variant of Erickson, Monma and Veinott ("Send-and-split met
 for minimum-concave-cost network flows", Math. Oper. Res. 12, 1987). Time
 ``O(3^k n + 2^k (m + n) log n)`` for ``k + 1`` terminals, ``n`` vertices and ``m``
 edges (the reference: ``O(3^k n + 2^k n^2)`` plus all-pairs shortest paths), memory
-``O(2^k n)``. Labels that cannot be part of a tree cheaper than a 2-approximation
-(the terminals' distance-graph MST) are pruned (a lower bound on the rest of the tree:
-the largest distance to a terminal outside the subset), so most of the ``2^k``
-Dijkstra runs touch few vertices. The optimum is the same; with non-integer weights its
+``O(2^k n)``. Labels that cannot be part of a tree cheaper than the best one known
+are pruned, so most of the ``2^k`` Dijkstra runs touch few vertices. The best tree known
+starts as a 2-approximation (the terminals' distance-graph MST) and improves as soon as a
+subset and its complement are both done (their two trees at a vertex plus the path from
+there to the root span every terminal). The lower bound on the rest of a tree at ``v``
+is the larger of the farthest terminal outside the subset and half a 1-tree of ``v``
+and those terminals, the bounds of Hougardy, Silvanus and Vygen ("Dijkstra meets
+Steiner", Math. Prog. Comp. 9, 2017, Sec. 4). The optimum is the same; with non-integer weights its
 last bits may differ (sums are added in another order). Imported only when
 :func:`tether.jit.enabled`.
 """
@@ -127,19 +131,13 @@ def steiner_kernel(indptr, indices, weights, terminals):  # noqa: ANN001, ANN201
               verts, zero, np.inf)  # fmt: skip
         if i < k:
             dp[1 << i] = dterm[i]
-    limit = _upper_bound(dterm, terminals)
-    limit += 1e-9 * max(1.0, limit)  # rounding slack: never prune a label of the optimum
+    limit = _with_slack(_upper_bound(dterm, terminals))
     lb = np.empty(n)
+    work = np.empty((2, n))
     for s in range(1, full + 1):
         if s & (s - 1) == 0:
             continue
-        # lb[v]: the rest of an optimal tree joins v to every terminal outside S (and the
-        # root), so it costs at least the largest of those distances
-        lb[:] = dterm[k]
-        for i in range(k):
-            if not (s >> i) & 1:
-                for v in range(n):
-                    lb[v] = max(lb[v], dterm[i, v])
+        lower_bounds(dterm, terminals, s, lb, work)
         low = s & -s
         rest = s ^ low
         row = dp[s]
@@ -157,17 +155,81 @@ def steiner_kernel(indptr, indices, weights, terminals):  # noqa: ANN001, ANN201
             if b == 0:
                 break
         relax(indptr, indices, weights, row, pred[s], keys, verts, lb, limit)
+        c = full ^ s
+        if c and (c < s or c & (c - 1) == 0):  # both halves done: the trees of S + {v}
+            # and of T - S + {v} with the path v -> root span every terminal
+            best = np.inf
+            pc, to_root = dp[c], dterm[k]
+            for v in range(n):
+                best = min(best, row[v] + pc[v] + to_root[v])
+            limit = min(limit, _with_slack(best))
     return dp[full, root], pred, split
 
 
 @njit(cache=True)
+def _with_slack(cost):  # noqa: ANN001, ANN202
+    """The pruning limit for a tree of ``cost``: rounding slack, never prune the optimum."""
+    return cost + 1e-9 * max(1.0, cost)
+
+
+@njit(cache=True)
+def lower_bounds(dterm, terminals, s, lb, work):  # noqa: ANN001, ANN201
+    """``lb[v]``: a lower bound on the part of a tree outside the labels of subset ``s``.
+
+    A tree of ``S + {v}`` is completed by a tree joining ``v`` to ``R``, the terminals
+    outside ``S`` (with the root, ``terminals[-1]``). That costs at least the largest
+    distance from ``v`` into ``R``, and at least half a 1-tree (the MST of ``R`` in the
+    distance graph plus the two shortest distances from ``v`` into ``R``): a tree,
+    walked around, is a tour through ``v`` and ``R``, and a tour costs at least a
+    1-tree. ``dterm[i]`` are the distances from ``terminals[i]``; ``work`` is ``(2, n)``
+    scratch.
+    """
+    k = len(terminals) - 1
+    members = np.empty(k + 1, np.int64)
+    m = 0
+    for i in range(k):
+        if not (s >> i) & 1:
+            members[m] = i
+            m += 1
+    members[m] = k
+    m += 1
+    near, second = work[0], work[1]
+    lb[:] = dterm[k]
+    near[:] = dterm[k]
+    second[:] = np.inf
+    for j in range(m - 1):
+        row = dterm[members[j]]
+        for v in range(len(lb)):
+            d = row[v]
+            lb[v] = max(lb[v], d)
+            if d < near[v]:
+                second[v] = near[v]
+                near[v] = d
+            else:
+                second[v] = min(second[v], d)
+    if m >= 2:
+        half = 0.5 * _mst_weight(dterm, terminals, members[:m])
+        for v in range(len(lb)):
+            lb[v] = max(lb[v], half + 0.5 * (near[v] + second[v]))
+
+
+@njit(cache=True)
 def _upper_bound(dterm, terminals):  # noqa: ANN001, ANN202
-    """Weight of a minimum spanning tree of the terminals' distance graph (Prim).
+    """Weight of a minimum spanning tree of the terminals' distance graph.
 
     The union of its shortest paths is a connected subgraph holding every terminal,
     so the optimal Steiner tree costs at most this (Kou, Markowsky and Berman 1981).
     """
-    t = len(terminals)
+    return _mst_weight(dterm, terminals, np.arange(len(terminals)))
+
+
+@njit(cache=True)
+def _mst_weight(dterm, terminals, members):  # noqa: ANN001, ANN202
+    """Prim's MST weight of the distance graph on ``terminals[members]``.
+
+    ``dterm[i, v]`` is the distance from ``terminals[i]`` to vertex ``v``.
+    """
+    t = len(members)
     inside = np.zeros(t, np.bool_)
     best = np.full(t, np.inf)
     best[0] = 0.0
@@ -181,7 +243,7 @@ def _upper_bound(dterm, terminals):  # noqa: ANN001, ANN202
         total += best[j]
         for c in range(t):
             if not inside[c]:
-                best[c] = min(best[c], dterm[j, terminals[c]])
+                best[c] = min(best[c], dterm[members[j], terminals[members[c]]])
     return total
 
 
