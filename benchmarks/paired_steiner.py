@@ -3,9 +3,10 @@ one process: the paired version of issue 14's Steiner row.
 
 The row's probe (``bench_issue14.py --rows steiner``) times each tree in its own process,
 and each process's ratio moves by about +-10 % with the machine. Here the old tree's
-``tether/recurrent/planning/steiner.py`` is loaded from ``--old-src`` beside the
-installed one, and for each of the probe's graphs (``issue14_probes.steiner_graphs``)
-old, new and mehlhorn run in turns (``--repeat`` rounds, medians). Both trees must give
+``tether/recurrent/planning/steiner.py`` and ``steiner_kernels.py`` are loaded from
+``--old-src`` beside the installed ones (the old ``steiner`` calling the old kernels),
+and for each of the probe's graphs (``issue14_probes.steiner_graphs``) old, new and
+mehlhorn run in turns (``--repeat`` rounds, medians). Both trees must give
 the same cost and the same tree. Prints the per-graph medians and the row's headline
 (median exact time over median mehlhorn time) for both trees; writes JSON.
 
@@ -35,13 +36,23 @@ from tether.recurrent.planning import steiner as new  # noqa: E402
 HERE = Path(__file__).resolve().parent
 
 
-def load_old(src: Path):  # noqa: ANN201
-    """The old tree's ``steiner`` module (its kernels are the installed tree's)."""
-    path = src / "tether" / "recurrent" / "planning" / "steiner.py"
-    spec = importlib.util.spec_from_file_location("old_steiner", path)
+def _load(name: str, path: Path, source: str):  # noqa: ANN202
+    spec = importlib.util.spec_from_loader(name, loader=None, origin=str(path))
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module.__file__ = str(path)  # numba's cache keys on the file
+    sys.modules[name] = module
+    exec(compile(source, str(path), "exec"), module.__dict__)  # noqa: S102
     return module
+
+
+def load_old(src: Path):  # noqa: ANN201
+    """The old tree's ``steiner`` module, calling the old tree's own compiled kernels."""
+    planning = src / "tether" / "recurrent" / "planning"
+    kernels = planning / "steiner_kernels.py"
+    _load("old_steiner_kernels", kernels, kernels.read_text())
+    source = (planning / "steiner.py").read_text()
+    source = source.replace("tether.recurrent.planning.steiner_kernels", "old_steiner_kernels")
+    return _load("old_steiner", planning / "steiner.py", source)
 
 
 def main() -> None:

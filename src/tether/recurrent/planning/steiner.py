@@ -78,7 +78,7 @@ def steiner_tree(
     The reference is Dreyfus-Wagner with ``O(3^k n + 2^k n^2 + n (m + n log n))`` time and
     ``O(2^k n)`` memory for ``k`` terminals, ``n`` vertices, ``m`` edges: on the
     SteinLib B instances (50-100 vertices) the compiled variant takes milliseconds for
-    up to 13 terminals and about 22 s for 19 (``benchmarks/bench_steinlib.py``); each
+    up to 13 terminals and about 19 s for 19 (``benchmarks/bench_steinlib.py``); each
     terminal more triples the work. Optimality is exact (integer or float weights).
     """
     if graph.is_directed():
@@ -137,6 +137,8 @@ def _steiner_tree_kernel(
     np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
     term_idx = np.array([index[t] for t in terms], dtype=np.int64)
     cost, pred, split = steiner_kernel(indptr, dst[order], np.concatenate([w, w])[order], term_idx)
+    if not np.isfinite(cost):  # the terminals are connected: only a pruning bug gets here
+        raise RuntimeError("steiner_kernel pruned every tree of the terminals")
     edges = tree_edges(pred, split, int(term_idx[-1]), (1 << (len(terms) - 1)) - 1)
     tree = _as_tree(graph, [(nodes[a], nodes[b]) for a, b in edges.tolist()], terms, weight)
     return SteinerTree(float(cost), tree)
