@@ -8,15 +8,19 @@ distance matrix: the variant of Erickson, Monma and Veinott ("Send-and-split met
 for minimum-concave-cost network flows", Math. Oper. Res. 12, 1987). Time
 ``O(3^k n + 2^k (m + n) log n)`` for ``k + 1`` terminals, ``n`` vertices and ``m``
 edges (the reference: ``O(3^k n + 2^k n^2)`` plus all-pairs shortest paths), memory
-``O(2^k n)``. Labels that cannot be part of a tree cheaper than the best one known
-are pruned, so most of the ``2^k`` Dijkstra runs touch few vertices. The best tree known
-starts as a 2-approximation (the terminals' distance-graph MST) and improves as soon as a
-subset and its complement are both done (their two trees at a vertex plus the path from
-there to the root span every terminal). The lower bound on the rest of a tree at ``v``
-is the larger of the farthest terminal outside the subset and half a 1-tree of ``v``
-and those terminals, the bounds of Hougardy, Silvanus and Vygen ("Dijkstra meets
-Steiner", Math. Prog. Comp. 9, 2017, Sec. 4). The optimum is the same; with non-integer weights its
-last bits may differ (sums are added in another order). Imported only when
+``O(2^k n)``.
+
+Labels that cannot be part of a tree cheaper than the best one known are pruned, so
+most of the ``2^k`` Dijkstra runs touch few vertices, and a merge of two subsets whose
+cheapest labels (with the bound below) already exceed it is skipped whole. The best tree
+known starts as a 2-approximation (the terminals' distance-graph MST) and improves as
+soon as a subset and its complement are both done (their two trees at a vertex plus the
+path from there to the root span every terminal). The lower bound on the rest of a tree
+at ``v`` is the larger of the farthest terminal outside the subset and half a 1-tree of
+``v`` and those terminals, the bounds of Hougardy, Silvanus and Vygen ("Dijkstra meets
+Steiner", Math. Prog. Comp. 9, 2017, Sec. 4). The optimum is the same as the
+reference's; with non-integer weights its last bits may differ (sums are added in
+another order). Imported only when
 :func:`tether.jit.enabled`.
 """
 
@@ -134,10 +138,12 @@ def steiner_kernel(indptr, indices, weights, terminals):  # noqa: ANN001, ANN201
     limit = _with_slack(_upper_bound(dterm, terminals))
     lb = np.empty(n)
     work = np.empty((2, n))
+    lowest = np.zeros(full + 1)  # per subset, its cheapest label (0 for a singleton)
     for s in range(1, full + 1):
         if s & (s - 1) == 0:
             continue
         lower_bounds(dterm, terminals, s, lb, work)
+        lb_min = lb.min()
         low = s & -s
         rest = s ^ low
         row = dp[s]
@@ -146,15 +152,19 @@ def steiner_kernel(indptr, indices, weights, terminals):  # noqa: ANN001, ANN201
             b = (b - 1) & rest
             a = low | b
             c = s ^ a
-            pa, pc = dp[a], dp[c]
-            for v in range(n):
-                val = pa[v] + pc[v]
-                if val < row[v] and val + lb[v] <= limit:
-                    row[v] = val
-                    split[s, v] = a
+            # every v of the pair fails the test below when its cheapest sum does (floating
+            # point addition is monotone), so skipping the pair changes nothing
+            if lowest[a] + lowest[c] + lb_min <= limit:
+                pa, pc = dp[a], dp[c]
+                for v in range(n):
+                    val = pa[v] + pc[v]
+                    if val < row[v] and val + lb[v] <= limit:
+                        row[v] = val
+                        split[s, v] = a
             if b == 0:
                 break
         relax(indptr, indices, weights, row, pred[s], keys, verts, lb, limit)
+        lowest[s] = row.min()
         c = full ^ s
         if c and (c < s or c & (c - 1) == 0):  # both halves done: the trees of S + {v}
             # and of T - S + {v} with the path v -> root span every terminal
