@@ -6,10 +6,11 @@ Reads the 18 instances of ``tests/data/steinlib`` (Beasley's set B, 50-100 verti
 :func:`tether.recurrent.planning.steiner.steiner_tree` on every instance with at most
 ``--max-terminals`` terminals: the compiled kernel (if numba is installed) and the
 reference numpy path up to ``--reference-max-terminals``. Dreyfus-Wagner's work grows
-as ``3^k`` for ``k`` terminals, so 19 terminals take about 19 s compiled and
-the 25-terminal instances are out of reach (about 3^6 = 729 times the 19-terminal
-time). Each solve is timed once (wall clock and process CPU time); the kernel's first
-call (numba import and cache load, or compilation on a cold cache) is timed apart, on
+as ``3^k`` for ``k`` terminals, so 19 terminals take 4-5 s compiled and the 25-terminal
+instances are out of reach (about 3^6 = 729 times the 19-terminal work, and tables of
+about 19 GiB, which ``steiner_tree`` refuses). Each solve is timed once (wall clock and
+process CPU time); the kernel's first call (numba import and cache load, or compilation
+on a cold cache) is timed apart, on
 b01, before the others.
 
 Usage::

@@ -115,6 +115,15 @@ def test_trivial_and_invalid_inputs() -> None:
         steiner_tree(h, [0, 2])
 
 
+def test_too_many_terminals_are_refused_before_any_table_is_made() -> None:
+    """Tables beyond MAX_TABLE_BYTES are refused with their size, on both paths."""
+    g = nx.connected_watts_strogatz_graph(100, 4, 0.3, seed=1)
+    with pytest.raises(ValueError, match=r"21 terminals on 100 vertices need 2\.3 GiB"):
+        steiner_tree(g, range(21))
+    cost, tree = steiner_tree(nx.star_graph(9), range(1, 10))
+    assert cost == 9 and tree.number_of_edges() == 9
+
+
 @pytest.mark.parametrize("seed", range(12))
 def test_kernel_and_reference_agree(seed: int, kernel_mode: bool) -> None:
     """Same optimum on 30-120 vertices and up to 9 terminals: exactly with integer weights."""

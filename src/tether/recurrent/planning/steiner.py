@@ -30,7 +30,12 @@ from scipy.sparse.csgraph import dijkstra
 
 from tether import jit
 
-__all__ = ["SteinerTree", "steiner_tree"]
+__all__ = ["MAX_TABLE_BYTES", "SteinerTree", "steiner_tree"]
+
+MAX_TABLE_BYTES = 2 * 1024**3
+"""The largest dynamic-programming tables :func:`steiner_tree` allocates: three
+``(2^(k-1), n)`` arrays of 8-byte entries for ``k`` terminals on ``n`` vertices
+(2 GiB: 21 terminals on 100 vertices are refused, 20 allowed)."""
 
 
 class SteinerTree(NamedTuple):
@@ -68,7 +73,8 @@ def steiner_tree(
     networkx.NetworkXNoPath
         If the terminals are not all in one connected component.
     ValueError
-        For a directed graph, an unknown terminal or a negative weight.
+        For a directed graph, an unknown terminal, a negative weight, or more terminals
+        than tables of :data:`MAX_TABLE_BYTES` hold (the message gives the size).
 
     Notes
     -----
@@ -78,7 +84,7 @@ def steiner_tree(
     The reference is Dreyfus-Wagner with ``O(3^k n + 2^k n^2 + n (m + n log n))`` time and
     ``O(2^k n)`` memory for ``k`` terminals, ``n`` vertices, ``m`` edges: on the
     SteinLib B instances (50-100 vertices) the compiled variant takes milliseconds for
-    up to 13 terminals and about 19 s for 19 (``benchmarks/bench_steinlib.py``); each
+    up to 13 terminals and 4-5 s for 19 (``benchmarks/bench_steinlib.py``); each
     terminal more triples the work. Optimality is exact (integer or float weights).
     """
     if graph.is_directed():
@@ -96,6 +102,15 @@ def steiner_tree(
     if any(t not in comp for t in terms):
         raise nx.NetworkXNoPath("the terminals are not connected in the graph")
     nodes = list(comp)
+    need = 3 * 8 * (1 << (len(terms) - 1)) * len(nodes)
+    if need > MAX_TABLE_BYTES:
+        raise ValueError(
+            f"steiner_tree: {len(terms)} terminals on {len(nodes)} vertices need "
+            f"{need / 1024**3:.1f} GiB of tables (MAX_TABLE_BYTES allows "
+            f"{MAX_TABLE_BYTES / 1024**3:g} GiB); "
+            "use fewer terminals or an approximation "
+            "(networkx.algorithms.approximation.steiner_tree)"
+        )
     index = {v: i for i, v in enumerate(nodes)}
     if jit.enabled():  # compiled Dreyfus-Wagner with Dijkstra relaxations, same optimum
         return _steiner_tree_kernel(graph, nodes, index, terms, weight)
