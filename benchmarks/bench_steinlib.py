@@ -36,7 +36,7 @@ from typing import Any
 
 from tether import jit
 from tether.graph.steinlib import read_stp
-from tether.recurrent.planning.steiner import steiner_tree
+from tether.recurrent.planning.steiner import MAX_TABLE_BYTES, steiner_tree, table_bytes
 
 HERE = Path(__file__).resolve().parent
 DATA = HERE.parent / "tests" / "data" / "steinlib"
@@ -109,8 +109,11 @@ def main(argv: list[str] | None = None) -> int:
             "terminals": k,
             "optimum": best[path.stem],
         }
+        need = table_bytes(k, graph.number_of_nodes())  # the graphs are connected
         if k > args.max_terminals:
             row["skipped"] = f"more than {args.max_terminals} terminals"
+        elif need > MAX_TABLE_BYTES:
+            row["skipped"] = f"tables of {need / 1024**3:.1f} GiB (MAX_TABLE_BYTES)"
         else:
             if kernel:
                 row["kernel"] = solve(graph, terminals, True)

@@ -30,12 +30,18 @@ from scipy.sparse.csgraph import dijkstra
 
 from tether import jit
 
-__all__ = ["MAX_TABLE_BYTES", "SteinerTree", "steiner_tree"]
+__all__ = ["MAX_TABLE_BYTES", "SteinerTree", "steiner_tree", "table_bytes"]
 
 MAX_TABLE_BYTES = 2 * 1024**3
 """The largest dynamic-programming tables :func:`steiner_tree` allocates: three
 ``(2^(k-1), n)`` arrays of 8-byte entries for ``k`` terminals on ``n`` vertices
 (2 GiB: 21 terminals on 100 vertices are refused, 20 allowed)."""
+
+
+def table_bytes(terminals: int, vertices: int) -> int:
+    """Bytes of :func:`steiner_tree`'s tables for that many distinct terminals and
+    vertices in their component: three ``(2^(terminals-1), vertices)`` arrays."""
+    return 3 * 8 * (1 << max(terminals - 1, 0)) * vertices
 
 
 class SteinerTree(NamedTuple):
@@ -102,7 +108,7 @@ def steiner_tree(
     if any(t not in comp for t in terms):
         raise nx.NetworkXNoPath("the terminals are not connected in the graph")
     nodes = list(comp)
-    need = 3 * 8 * (1 << (len(terms) - 1)) * len(nodes)
+    need = table_bytes(len(terms), len(nodes))
     if need > MAX_TABLE_BYTES:
         raise ValueError(
             f"steiner_tree: {len(terms)} terminals on {len(nodes)} vertices need "
