@@ -150,6 +150,7 @@ class RecurrentStrategy:
             "exploration_finished": self.finished,
             "plans_not_proven_optimal": sum(not p.get("proven_optimal", True) for p in issued),
             "plans_timed_out": sum(bool(p.get("timed_out", False)) for p in issued),
+            "plans_apx_delta_capped": sum(bool(p.get("apx_delta_capped")) for p in issued),
             "plans_after_failures": sum(p["step"] >= self._first_failure for p in issued),
             "robots_preempted_by_failures": sum(len(x["preempted"]) for x in self.recoveries),
         }
@@ -370,6 +371,8 @@ class RecurrentStrategy:
             timed_out=conf.timed_out,
             fallback=conf.fallback,
         )
+        if conf.apx_delta_capped:  # MAX_TABLE_SUBSETS lowered delta for this plan
+            record.update(apx_delta=conf.apx_delta, apx_delta_capped=True)
         self.plans.append(record)
         sim.log("plan", **record)
 

@@ -57,6 +57,12 @@ from tether.recurrent.planning.steiner import dreyfus_wagner
 
 CHUNK_ROWS = 2048  # subsets per vectorised block (keeps blocks in cache)
 FIRST_BLOCK = 8  # subsets examined by Algorithm 1 before the block size doubles
+MAX_TABLE_SUBSETS = 1 << 25
+"""The most subsets the rank tables may index, ``sum_{2 <= s < delta} C(|F|, s)`` (12
+bytes each, so at most 384 MiB): :func:`apx_delta` lowers ``delta`` below that. With no
+cap, ``delta = 30`` in ``recurrent_grass`` (12 robots, 84 frontiers) asked for 34 GiB for
+the table of the 7-subsets alone. The paper's ``delta = 4`` stays under it up to 580
+frontiers."""
 
 
 @dataclass
@@ -70,6 +76,26 @@ class ApxResult:
     upper_bound: float
     subsets_total: int
     subsets_evaluated: int
+    delta_used: int = 0
+    """The ``delta`` Algorithm 1 ran with (:func:`apx_delta`; 0 without frontiers)."""
+    delta_capped: bool = False
+    """True if :data:`MAX_TABLE_SUBSETS` lowered it (not only the budget or ``|F|``)."""
+
+
+def apx_delta(frontiers: int, budget: int, delta: int) -> tuple[int, bool]:
+    """The ``delta`` Algorithm 1 runs with, and whether :data:`MAX_TABLE_SUBSETS` lowered it.
+
+    A subset of more than ``budget`` frontiers is infeasible and there are only
+    ``frontiers`` of them, so ``min(delta, budget, frontiers)``; then lowered while the
+    rank tables of the sizes below it (:class:`LazySteiner`: ``2 <= s < delta``) would
+    index more than :data:`MAX_TABLE_SUBSETS` subsets. Theorem 4.1's bound
+    (``upper_bound``) holds for the lowered value.
+    """
+    d = max(1, min(delta, budget, frontiers))
+    capped = d
+    while capped > 1 and sum(comb(frontiers, s) for s in range(2, capped)) > MAX_TABLE_SUBSETS:
+        capped -= 1
+    return capped, capped < d
 
 
 def _relax(
@@ -399,10 +425,9 @@ def solve_apx(problem: Problem, delta: int, pair_filter: bool = True) -> ApxResu
     # Steiner tree has at least one vertex per frontier besides b. Enumerating such
     # subsets only feeds the DP infeasible work (C(120, 4) = 8.2 M subsets when 3
     # robots are ready), so the subsets stop at min(delta, budget) frontiers; the
-    # result is the same.
-    dp = LazySteiner(
-        problem.dist, fr, budget, min(delta, budget), unit_graph=True, pair_filter=pair_filter
-    )
+    # result is the same. MAX_TABLE_SUBSETS may lower it further (apx_delta).
+    used, capped = apx_delta(k, budget, delta)
+    dp = LazySteiner(problem.dist, fr, budget, used, unit_graph=True, pair_filter=pair_filter)
     uf = problem.utility[fr]
     dist_f = np.where(problem.dist > budget, np.inf, problem.dist).astype(float)
     z_best, tree_best, u_best = 0.0, {0}, 0.0
@@ -437,7 +462,8 @@ def solve_apx(problem: Problem, delta: int, pair_filter: bool = True) -> ApxResu
     utility = float(problem.utility[list(verts)].sum())
     kk = min(budget, k)
     best_possible = float(np.sort(uf)[::-1][:budget].sum())
-    proven = delta >= kk or utility >= best_possible - 1e-12 * max(1.0, best_possible)
-    upper = utility if proven else min(best_possible, u_best * kk / delta)
+    # used == min(delta, kk) unless capped, so without the cap these are the paper's
+    proven = used >= kk or utility >= best_possible - 1e-12 * max(1.0, best_possible)
+    upper = utility if proven else min(best_possible, u_best * kk / used)
     total = sum(dp.ranker.count(s) for s in range(1, dp.delta + 1))
-    return ApxResult(verts, utility, u_best, proven, upper, total, dp.evaluated + k)
+    return ApxResult(verts, utility, u_best, proven, upper, total, dp.evaluated + k, used, capped)

@@ -86,6 +86,11 @@ class Configuration:
     fallback
         True when that best configuration is the APX one (Algorithm 1, the
         solver found nothing better within the budget).
+    apx_delta
+        The ``delta`` APX ran with (:func:`~tether.recurrent.planning.apx.apx_delta`),
+        None if it did not run.
+    apx_delta_capped
+        True if :data:`~tether.recurrent.planning.apx.MAX_TABLE_SUBSETS` lowered it.
     """
 
     vertices: frozenset
@@ -98,6 +103,8 @@ class Configuration:
     fixed: frozenset = field(default_factory=frozenset)
     timed_out: bool = False
     fallback: bool = False
+    apx_delta: int | None = None
+    apx_delta_capped: bool = False
 
     @property
     def occupied(self) -> frozenset:
@@ -152,10 +159,11 @@ def optimal_configuration(
     t0 = time.perf_counter()
     problem = _problem.build(graph, base, utilities, budget, fixed)
     timed_out = fallback = False
+    apx_run = None
     if method == "apx":
         if int(delta) != delta or delta < 1:
             raise ValueError(f"delta must be a positive integer (got {delta!r})")
-        res = solve_apx(problem, int(delta))
+        res = apx_run = solve_apx(problem, int(delta))
         verts, util, proven, upper, name = (
             res.vertices,
             res.utility,
@@ -166,7 +174,7 @@ def optimal_configuration(
     elif method == "ilp":
         apx = None
         if time_limit_s is not None:  # the fallback, computed first
-            apx = solve_apx(problem, int(delta))
+            apx = apx_run = solve_apx(problem, int(delta))
         left = None if time_limit_s is None else time_limit_s - (time.perf_counter() - t0)
         res = solve_ilp(problem, backend=backend, time_limit_s=left)
         verts, util, proven, upper, name = (
@@ -196,6 +204,8 @@ def optimal_configuration(
         fixed=problem.fixed,
         timed_out=timed_out,
         fallback=fallback,
+        apx_delta=None if apx_run is None else apx_run.delta_used,
+        apx_delta_capped=apx_run is not None and apx_run.delta_capped,
     )
 
 
