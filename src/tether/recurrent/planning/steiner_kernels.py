@@ -20,8 +20,7 @@ at ``v`` is the larger of the farthest terminal outside the subset and half a 1-
 ``v`` and those terminals, the bounds of Hougardy, Silvanus and Vygen ("Dijkstra meets
 Steiner", Math. Prog. Comp. 9, 2017, Sec. 4). The optimum is the same as the
 reference's; with non-integer weights its last bits may differ (sums are added in
-another order). Imported only when
-:func:`tether.jit.enabled`.
+another order). Imported only when :func:`tether.jit.enabled`.
 """
 
 from __future__ import annotations
