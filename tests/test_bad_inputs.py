@@ -448,6 +448,13 @@ CASES: dict[str, Case] = {
             },
         ),
     ),
+    "sweep: a billion seeds (refused before any list is made)": Case(
+        "sweep.seeds",
+        _set("sweep", {"strategy.params.d0_m": [5.0, 8.0], "seeds": 1_000_000_000}),
+    ),
+    "sweep: too many trials (2 combinations x 60,000 seeds)": Case(
+        "sweep.seeds", _set("sweep", {"strategy.params.d0_m": [5.0, 8.0], "seeds": 60_000})
+    ),
     # ---- --set on the command line (validate and run alike)
     "--set unclosed YAML": Case("--set sensing.range_m", args=("--set", "sensing.range_m=[x")),
     "--set without =": Case("--set", args=("--set", "sensing.range_m")),

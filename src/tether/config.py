@@ -27,6 +27,7 @@ from pydantic import (
 
 from tether.errors import ScenarioError
 from tether.sweepspec import MAX_SWEEP_COMBINATIONS as MAX_SWEEP_COMBINATIONS  # re-exported
+from tether.sweepspec import MAX_SWEEP_TRIALS as MAX_SWEEP_TRIALS  # re-exported
 from tether.sweepspec import SweepError, SweepSpec, parse_sweep
 
 BUILTIN_PACKAGE = "tether.scenarios"
@@ -40,8 +41,6 @@ MAX_DT_S = 86_400.0
 MAX_ROBOTS = 1_000_000
 MAX_STEPS = 100_000_000
 MAX_SEED = 2**63 - 1
-#: a sweep holds at most this many trials (its grid at most MAX_SWEEP_COMBINATIONS combinations)
-MAX_SWEEP_TRIALS = 100_000
 #: a run folder name part longer than this (bytes) is shortened and given a hash
 MAX_LABEL_BYTES = 80
 #: a scenario file larger than this is refused before it is parsed

@@ -51,6 +51,7 @@ from typing import Any
 
 #: a sweep grid holds at most this many combinations
 MAX_SWEEP_COMBINATIONS = 10_000
+MAX_SWEEP_TRIALS = 100_000  # combinations x seeds
 MAX_COMBOS = MAX_SWEEP_COMBINATIONS
 #: keys of the full form (everything else in a plain block is an axis)
 RESERVED = ("axes", "zip", "seeds", "quick")
@@ -274,6 +275,14 @@ def _check_size(field: str, spec: SweepSpec) -> None:
             field,
             f"the grid has {spec.n_combinations:,} combinations; at most "
             f"{MAX_SWEEP_COMBINATIONS:,} (sweep fewer values, or split the sweep)",
+        )
+    seeds = spec.seeds if isinstance(spec.seeds, int) else len(spec.seeds or [1])
+    if spec.n_combinations * seeds > MAX_SWEEP_TRIALS:
+        raise SweepError(
+            f"{field}.seeds",
+            f"{spec.n_combinations:,} combinations x {seeds:,} seeds = "
+            f"{spec.n_combinations * seeds:,} trials; at most {MAX_SWEEP_TRIALS:,} "
+            "(use fewer seeds or values)",
         )
 
 

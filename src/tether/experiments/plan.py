@@ -62,7 +62,14 @@ def seeds_of(scenario: Scenario, seeds: int | list[int] | None = None) -> list[i
     )  # fmt: skip
     if seeds is not None and not (ok_count or ok_list):
         raise ValueError(f"seeds must be a positive integer or a list of seeds (got {seeds!r})")
-    chosen = sweep_spec(scenario).seed_list(scenario.seed, seeds)
+    spec = sweep_spec(scenario)
+    count = seeds if seeds is not None else spec.seeds
+    if isinstance(count, int) and count > MAX_SWEEP_TRIALS:  # refused before the list is made
+        raise TetherError(
+            f"{scenario.source}: sweep: seeds: {count:,} seeds; a sweep has at most "
+            f"{MAX_SWEEP_TRIALS:,} trials (use fewer seeds)"
+        )
+    chosen = spec.seed_list(scenario.seed, seeds)
     if max(chosen) > MAX_SEED:
         raise TetherError(
             f"{scenario.source}: seed: {scenario.seed} + {len(chosen)} seeds passes 2**63 - 1; "
@@ -83,7 +90,7 @@ def trials_of(
     seed_list = seeds_of(scenario, seeds)
     axes = check_sweep(scenario, strategy_class(scenario))
     combos = sweep_spec(scenario).combinations(axes)
-    if len(combos) * len(seed_list) > MAX_SWEEP_TRIALS:
+    if len(combos) * len(seed_list) > MAX_SWEEP_TRIALS:  # the block's seeds: when parsed
         raise TetherError(
             f"{scenario.source}: sweep: {len(combos):,} combinations x {len(seed_list):,} seeds = "
             f"{len(combos) * len(seed_list):,} trials; at most {MAX_SWEEP_TRIALS:,} "
