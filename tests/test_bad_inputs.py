@@ -448,6 +448,16 @@ CASES: dict[str, Case] = {
             },
         ),
     ),
+    "estimator: a billion rounds per sub-step": Case(
+        "strategy.params.estimator.rounds_per_substep",
+        _set("strategy.params.estimator", {"rounds_per_substep": 1_000_000_000}),
+        base=connectivity,
+    ),
+    "estimator: messages delayed a billion rounds": Case(
+        "strategy.params.estimator.delay_rounds",
+        _set("strategy.params.estimator", {"delay_rounds": 1_000_000_000}),
+        base=connectivity,
+    ),
     "sweep: a billion seeds (refused before any list is made)": Case(
         "sweep.seeds",
         _set("sweep", {"strategy.params.d0_m": [5.0, 8.0], "seeds": 1_000_000_000}),

@@ -72,15 +72,22 @@ class ExternalForce(_Strict):
     gain_n_per_m: float = Field(default=1.0, ge=0)
 
 
+MAX_ROUNDS = 10_000  # estimator rounds per integrator sub-step
+MAX_WARMUP_ROUNDS = 1_000_000  # about 70 s for 35 robots
+MAX_DELAY_ROUNDS = 1_000
+
+
 class EstimatorConfig(EstimatorParams):
     """Decentralized estimator (its gains), rounds and message-layer faults."""
 
     model_config = ConfigDict(extra="forbid", frozen=False, allow_inf_nan=False)
 
-    rounds_per_substep: int = Field(default=20, ge=1)
-    warmup_rounds: int = Field(default=3000, ge=0)
+    # the caps bound the work and the messages held in flight (about 20 kB per round of
+    # delay for 35 robots); far above the paper's few rounds
+    rounds_per_substep: int = Field(default=20, ge=1, le=MAX_ROUNDS)
+    warmup_rounds: int = Field(default=3000, ge=0, le=MAX_WARMUP_ROUNDS)
     loss_probability: float = Field(default=0.0, ge=0, lt=1)
-    delay_rounds: int = Field(default=0, ge=0)
+    delay_rounds: int = Field(default=0, ge=0, le=MAX_DELAY_ROUNDS)
     failures: dict[int, int] = Field(default_factory=dict)
 
 
