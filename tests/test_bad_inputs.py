@@ -259,6 +259,22 @@ CASES: dict[str, Case] = {
         ),
     ),
     "uniform without extent": Case("team.init", _set("team.init.kind", "uniform")),
+    "uniform: 100,000 robots 2 m apart in a 40 m box (refused before any draw)": Case(
+        "team.init.extent_m",
+        _all(
+            _set("team.n_robots", 100_000),
+            _set(
+                "team.init", {"kind": "uniform", "extent_m": [40.0, 40.0], "min_separation_m": 2.0}
+            ),
+        ),
+    ),
+    "uniform: 1,000,000 robots in a 40 m box (about 2e10 links to list)": Case(
+        "team.init.extent_m",
+        _all(
+            _set("team.n_robots", 1_000_000),
+            _set("team.init", {"kind": "uniform", "extent_m": [40.0, 40.0]}),
+        ),
+    ),
     "positions of the wrong shape": Case(
         "team.init",
         _all(_set("team.init.kind", "positions"), _set("team.init.positions", [[0, 0], [1, 1]])),

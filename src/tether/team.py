@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -162,6 +164,7 @@ def uniform_connected(
     max_tries = int(min(max_tries, max(10, 2_000_000 // max(n, 1))))
     center = _default_center(world) if center is None else np.asarray(center, dtype=float)
     extent = np.broadcast_to(np.asarray(extent_m, dtype=float), (world.dim,))
+    _check_box_fits(n, extent, range_m, min_separation_m)
     for _ in range(max_tries):
         pos = center + (rng.random((n, world.dim)) - 0.5) * extent
         if not world.points_free(pos).all():
@@ -174,6 +177,37 @@ def uniform_connected(
         f"no connected placement of {n} robots in a box of {extent.tolist()} m found in "
         f"{max_tries} draws; shrink extent_m or raise the sensing range"
     )
+
+
+MAX_EXPECTED_PAIRS = 50_000_000  # links of a uniform draw listed at once (~0.8 GB)
+
+
+def _check_box_fits(n: int, extent: np.ndarray, range_m: float, separation_m: float) -> None:
+    """Refuse, before any draw, a box that cannot hold ``n`` robots ``separation_m`` apart
+    (discs of radius ``separation_m / 2`` centred in the box lie in the box grown by
+    ``separation_m`` and cannot fill more than the densest packing, pi / sqrt(12) in 2-D,
+    pi / sqrt(18) in 3-D), or whose draws would list more than ``MAX_EXPECTED_PAIRS``
+    links within ``range_m`` (the expected count: each pair is in range with probability
+    at most a ball's volume over the box's)."""
+    dim = len(extent)
+    ball = math.pi ** (dim / 2) / math.gamma(dim / 2 + 1)  # volume of the unit ball
+    if separation_m > 0:
+        density = {2: math.pi / math.sqrt(12), 3: math.pi / math.sqrt(18)}.get(dim, 1.0)
+        fit = density * float(np.prod(extent + separation_m)) / (ball * (separation_m / 2) ** dim)
+        if n > fit:
+            raise ValueError(
+                f"extent_m: {n:,} robots at least {separation_m:g} m apart do not fit in a "
+                f"box of {extent.tolist()} m (at most {int(fit):,}); enlarge extent_m, lower "
+                "min_separation_m or place fewer robots"
+            )
+    share = min(1.0, ball * min(range_m, 1e7) ** dim / max(float(np.prod(extent)), 1e-300))
+    pairs = n * (n - 1) / 2 * share
+    if pairs > MAX_EXPECTED_PAIRS:
+        raise ValueError(
+            f"extent_m: {n:,} robots in a box of {extent.tolist()} m would have about "
+            f"{pairs:,.0f} links within {range_m:g} m (at most {MAX_EXPECTED_PAIRS:,}); "
+            "enlarge extent_m or place fewer robots"
+        )
 
 
 def grid_positions(n: int, dim: int, spacing_m: float, center: np.ndarray) -> np.ndarray:
