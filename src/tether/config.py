@@ -98,7 +98,9 @@ class InitConfig(_Strict):
     free space around ``center``. ``grid``: a square/cubic lattice of pitch
     ``spacing_m``. ``uniform``: uniformly at random in a box of side lengths
     ``extent_m`` around ``center``, redrawn until the sensing graph is connected
-    and robots are ``min_separation_m`` apart. ``positions``: explicit ``(n, dim)`` list.
+    and robots are ``min_separation_m`` apart (a box that cannot hold the team that far
+    apart, or whose draws would list more than 50 M links, is refused before any draw).
+    ``positions``: explicit ``(n, dim)`` list.
     """
 
     kind: Literal["random_connected", "uniform", "grid", "positions"] = "random_connected"
