@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import re
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -311,10 +312,23 @@ def _check_expansion(data: Any, label: str) -> None:
         ) from None
 
 
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader, with YAML 1.2's exponent floats (``1e-6``, ``2.5e3``): YAML
+    1.1, which PyYAML follows, reads them as strings unless they have a dot and a sign."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."),
+)
+
+
 def parse_yaml(text: str | bytes, label: str) -> Any:
-    """``yaml.safe_load`` bounded in time and memory, with one-line errors naming ``label``."""
+    """``yaml.safe_load`` bounded in time and memory, with one-line errors naming ``label``
+    (exponent floats as in YAML 1.2: :class:`_Loader`)."""
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_Loader)  # noqa: S506 (a SafeLoader)
     except yaml.YAMLError as exc:
         raise ScenarioError(f"{label}: {_yaml_problem(exc)}") from None
     except RecursionError:
