@@ -11,10 +11,12 @@ import re
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
-
 from tests._cli import tether
+
 from tether.config import load_scenario
+from tether.recurrent.exploration.sim import ExplorationConfig, ExplorationSim, GoalKind
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -117,3 +119,22 @@ def test_tiny_resolution_is_refused_at_once(capsys, monkeypatch, skip_without_sh
 def test_map_path_must_be_a_string(capsys, value):
     line = _refused(capsys, "validate", "recurrent_grass", "--set", f"world.params.path={value}")
     assert "world.params.path" in line and "file path string" in line
+
+
+def test_least_speed_offered_moves_a_robot(capsys):
+    """The speed the message offers advances a robot in the simulator (not only runs)."""
+    line = _refused(
+        capsys, "validate", "recurrent_demo", "--set", "strategy.params.speed_m_s=1e-300"
+    )
+    least_m_s = float(re.search(r"at least (\S+) m/s", line).group(1))
+    scenario = load_scenario("recurrent_demo")
+    resolution_m = 0.1  # the demo's map
+    speed_cells = round(least_m_s * scenario.sim.dt_s / resolution_m, 9)
+    cfg = ExplorationConfig(n_robots=1, speed_cells=speed_cells, coarse_factor=3)
+    sim = ExplorationSim(np.zeros((30, 30), bool), np.array([15.0, 15.0]), None, cfg)
+    start = sim.pos[0].copy()
+    goal = start + [5.0, 0.0]
+    sim.assign(0, goal, GoalKind.FRONTIER, goal[None])
+    sim.t = 1
+    sim._move()
+    assert sim.pos[0][0] > start[0]
