@@ -138,3 +138,15 @@ def test_least_speed_offered_moves_a_robot(capsys):
     sim.t = 1
     sim._move()
     assert sim.pos[0][0] > start[0]
+
+
+def test_tiny_resolution_of_a_procedural_scene_is_one_line(capsys):
+    """The cell count overflows to inf: refused without numpy's overflow warnings."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning would print a second line
+        line = _refused(
+            capsys, "validate", "recurrent_demo", "--set", "world.params.resolution_m=1.0e-300"
+        )
+    assert "resolution_m" in line and "cells" in line
