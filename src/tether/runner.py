@@ -92,6 +92,11 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
     for key in ("path", "file"):
         if key in params:
             field = f"world.params.{key}"
+            if not isinstance(params[key], str) or not params[key]:
+                raise ScenarioError(
+                    f"{src}: {field}: got {params[key]!r}; it must be a file path string "
+                    "(e.g. ../shared/maps/grass.png)"
+                )
             resolved = scenario.resolve_path(params[key])
             if not resolved.exists():
                 raise ScenarioError(

@@ -28,6 +28,7 @@ from tether.config import MAX_LENGTH_M, Coordinate, finite_strict
 from tether.errors import ScenarioError
 from tether.limits import format_bytes, memory_budget_bytes
 from tether.paths.geodesic import CoarseGrid
+from tether.recurrent import checks
 from tether.recurrent.baseline_utility import UtilityStrategy
 from tether.recurrent.exploration.run import ExplorationRun
 from tether.recurrent.exploration.sim import (
@@ -152,7 +153,7 @@ def _config(
             f"{scenario.source}: strategy.params.link_model: unknown link model "
             f"{params.link_model!r}; expected one of: {known}"
         )
-    factor = max(int(round(params.coarse_cell_m / resolution_m)), 1)
+    factor = checks.coarse_factor(params, scenario, resolution_m, shape)
     # no ray or link reaches farther than the map's diagonal
     diagonal = np.inf if shape is None else float(np.hypot(*shape)) + 1.0
 
@@ -169,10 +170,15 @@ def _config(
             f"{sensor_cells:.0f} cells are more than {MAX_RAY_SAMPLES:,} samples per scan; "
             "raise sensor_resolution_deg or lower sensing.range_m"
         )
+    speed_cells = cells(params.speed_m_s * scenario.sim.dt_s)
+    checks.check_speed(params, scenario, resolution_m, speed_cells)
+    checks.check_ref_distance(params, scenario, resolution_m, cells(params.signal.ref_distance_m))
+    if isinstance(params, RecurrentParams):  # it plans from the BS's known coarse cell
+        checks.check_base_sensed(params, scenario, resolution_m, factor, sensor_cells)
     return ExplorationConfig(
         n_robots=scenario.team.n_robots,
         steps=scenario.sim.max_steps,
-        speed_cells=cells(params.speed_m_s * scenario.sim.dt_s),
+        speed_cells=speed_cells,
         fov_deg=params.fov_deg,
         sensor_range_cells=sensor_cells,
         sensor_resolution_deg=params.sensor_resolution_deg,

@@ -89,11 +89,13 @@ def floats(value: Any) -> np.ndarray | None:
 
 def cells_of(size_m: np.ndarray, resolution_m: float, scene: str = "scene") -> tuple[int, ...]:
     """Grid shape of a box ``size_m`` at ``resolution_m``; refused beyond ``MAX_CELLS`` cells."""
-    cells = np.maximum(np.round(np.asarray(size_m, dtype=float) / resolution_m), 1)
-    if not np.isfinite(cells).all() or float(np.prod(cells)) > MAX_CELLS:
+    with np.errstate(over="ignore"):  # a tiny resolution: inf cells, refused below
+        cells = np.maximum(np.round(np.asarray(size_m, dtype=float) / resolution_m), 1)
+        total = float(np.prod(cells))
+    if not np.isfinite(cells).all() or total > MAX_CELLS:
         raise ScenarioError(
             f"scene {scene!r}: resolution_m: {resolution_m:g} m over {np.asarray(size_m).tolist()} "
-            f"m gives {float(np.prod(cells)):.3g} cells, more than {MAX_CELLS:,}; raise "
+            f"m gives {total:.3g} cells, more than {MAX_CELLS:,}; raise "
             "resolution_m or shrink the scene"
         )
     return tuple(int(n) for n in cells)
