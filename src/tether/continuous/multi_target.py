@@ -29,6 +29,7 @@ from tether.comm import CommParams, MessageLayer
 from tether.continuous.consensus import EfficiencyConsensus
 from tether.continuous.dynamics import integrate
 from tether.continuous.election import Election
+from tether.continuous.multi_target_checks import check_planning_grid, target_book
 from tether.continuous.multi_target_params import MultiTargetParams
 from tether.continuous.placement import safe_team
 from tether.continuous.recruit import HelpFlood, RequestDepth, help_force
@@ -36,7 +37,7 @@ from tether.continuous.reference_filter import ReferenceFilter
 from tether.continuous.roles import ANCHOR, CONNECTOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
 from tether.continuous.strategy import ConnectivityStrategy
 from tether.continuous.substep import fused_total_force
-from tether.continuous.targets import TargetBook
+from tether.continuous.targets import TargetBook, outside_heights
 from tether.continuous.travel import (
     alignment,
     anchor_force,
@@ -45,7 +46,7 @@ from tether.continuous.travel import (
     travel_force,
 )
 from tether.errors import ScenarioError
-from tether.registry import STRATEGIES, TARGET_GENERATORS
+from tether.registry import STRATEGIES
 from tether.sim import StepContext, TeamState
 from tether.world.world import World
 
@@ -195,6 +196,9 @@ class MultiTargetStrategy(ConnectivityStrategy):
         if scenario.team.init.kind == "positions":
             return None
         s = params.start
+        why = None if s.center_m is not None else outside_heights(s.height_m, world)
+        if why is not None:
+            raise ScenarioError(f"{scenario.source}: strategy.params.start.height_m: {why}")
         try:
             q = safe_team(world, scenario.team.n_robots, params.connectivity(), rng,
                           margin_m=s.margin_m, center_m=s.center_m,
@@ -214,28 +218,8 @@ class MultiTargetStrategy(ConnectivityStrategy):
         rng: np.random.Generator,
     ) -> MultiTargetStrategy:
         cls.check_start(params, scenario, world, initial)
-        field = "strategy.params.targets"
-        if params.targets.kind not in TARGET_GENERATORS:
-            raise ScenarioError(
-                f"{scenario.source}: {field}.kind: unknown target generator "
-                f"{params.targets.kind!r}; expected one of: {', '.join(TARGET_GENERATORS.names())}"
-            )
-        gen = TARGET_GENERATORS.get(params.targets.kind)
-        gp = dict(params.targets.params)
-        if params.targets.kind == "paper_random" and gp.get("config_seed") is None:
-            gp["config_seed"] = int(scenario.seed)  # the run seed is the configuration
-        try:
-            book = TargetBook.empty(initial.n)
-            gen.fill(gen.Params.model_validate(gp), book, world, rng)
-        except ValueError as exc:
-            raise ScenarioError(f"{scenario.source}: {field}.params: {exc}") from None
-        for robot, queue in enumerate(book.queues):
-            for z in queue:
-                if len(z.position_m) != world.dim or not world.points_free(z.position_m[None])[0]:
-                    raise ScenarioError(
-                        f"{scenario.source}: {field}: target {z.id} of robot {robot} at "
-                        f"{z.position_m.tolist()} is not a free point of the {world.dim}-D world"
-                    )
+        check_planning_grid(params.r_grid_m, scenario, world)  # built at reset; validate sees it
+        book = target_book(params.targets, scenario, world, initial.n, rng)
         return cls(params, book)
 
     # -- lifecycle ---------------------------------------------------------------------

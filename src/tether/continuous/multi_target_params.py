@@ -7,10 +7,11 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from tether.continuous.params import TRAVEL_TABLE2
 from tether.continuous.strategy import ConnectivityStrategyParams
+from tether.continuous.targets import height_range
 
 
 class _Strict(BaseModel):
@@ -38,6 +39,8 @@ class StartConfig(_Strict):
     center_m: list[float] | None = None
     height_m: list[float] | None = None
     margin_m: float = Field(default=2.0, ge=0)
+
+    _heights = field_validator("height_m")(height_range)
 
 
 #: our defaults per preset, beyond Table 2 (docs/multi_target.md, "Helpers"): outdoors a

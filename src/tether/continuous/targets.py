@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
@@ -94,8 +94,23 @@ class TargetBook:
         return sum(len(q) for q in self.queues)
 
 
+#: at most this many targets from one ``paper_random`` generator (the paper draws 25)
+MAX_TARGETS = 100_000
+
+
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+def height_range(v: list[float] | None) -> list[float] | None:
+    """``v`` if it is ``None`` or ``[low, high]`` with ``low <= high``; else a clear error."""
+    if v is None:
+        return v
+    if len(v) != 2:
+        raise ValueError(f"need two heights [low, high] in m (got {v})")
+    if not v[0] <= v[1]:
+        raise ValueError(f"need low <= high in [low, high] (got {v}); swap them")
+    return v
 
 
 class TargetGenerator:
@@ -170,7 +185,7 @@ class PaperRandomParams(_Strict):
     """The paper's random trials (Sec. 4.1): which robots get how many targets, where."""
 
     config_seed: int = Field(default=0, ge=0, description="same targets for every team size")
-    explorers: list[int] = Field(
+    explorers: list[Annotated[int, Field(ge=0)]] = Field(
         default=[3, 3, 3, 3, 3, 2, 2, 2, 2, 2],
         description="targets per explorer: robots 0, 1, ... in this order",
     )
@@ -178,6 +193,18 @@ class PaperRandomParams(_Strict):
     clearance_m: float = Field(default=2.0, ge=0, allow_inf_nan=False)
     height_m: list[float] | None = Field(default=None, description="[min, max] z in 3-D")
     timeout_s: float | None = Field(default=None, gt=0)
+
+    _heights = field_validator("height_m")(height_range)
+
+    @field_validator("explorers")
+    @classmethod
+    def _at_most(cls, v: list[int]) -> list[int]:
+        if sum(v) > MAX_TARGETS:
+            raise ValueError(
+                f"{sum(v):,} targets in all, more than the {MAX_TARGETS:,} allowed; "
+                "give fewer targets per explorer"
+            )
+        return v
 
 
 @TARGET_GENERATORS.register("paper_random")
@@ -198,6 +225,9 @@ class PaperRandom(TargetGenerator):
                 f"{len(params.explorers)} explorers but only {len(book.queues)} robots; "
                 "raise team.n_robots or shorten targets.params.explorers"
             )
+        why = outside_heights(params.height_m, world)
+        if why is not None:
+            raise ValueError(f"height_m: {why}")
         config = np.random.default_rng(params.config_seed)
         count = int(sum(params.explorers))
         pts = draw_free_points(world, count, config, params.clearance_m, params.height_m)
@@ -230,3 +260,16 @@ def draw_free_points(
         if len(out) >= count:
             return np.asarray(out[:count])
     raise ValueError(f"no free point with clearance {clearance_m} m at heights [{lo}, {hi}] m")
+
+
+def outside_heights(height_m: list[float] | None, world: World) -> str | None:
+    """Why a ``[low, high]`` height range misses the 3-D world's heights (``None``: it does not)."""
+    if height_m is None or world.dim != 3 or world.bounds_m is None:
+        return None
+    lo, hi = (float(b[2]) for b in world.bounds_m)
+    if height_m[1] < lo or height_m[0] > hi:
+        return (
+            f"{list(height_m)} m is outside the world's heights [{lo:g}, {hi:g}] m; "
+            "give a range within them"
+        )
+    return None

@@ -34,13 +34,23 @@ from tether import jit
 from tether.world.grid import OccupancyGrid
 from tether.world.world import World
 
-__all__ = ["astar_grid", "neighbour_offsets", "plan_path", "planning_grid"]
+__all__ = [
+    "PLANNING_BYTES_PER_CELL",
+    "astar_grid",
+    "neighbour_offsets",
+    "plan_path",
+    "planning_grid",
+    "planning_shape",
+]
 
 _CONNECTIVITY = ("full", "face")
 _HEURISTICS = ("octile", "euclidean")
 # planning cells whose lower bound on the obstacle distance is within this of the
 # inflation radius still count as free (the distance field is a float sqrt)
 _TIE_M = 1e-9
+#: peak bytes per planning cell of :func:`planning_grid` and an A* search on it (measured
+#: about 150 for building the 3-D grid and up to 50 for a search across it; rounded up)
+PLANNING_BYTES_PER_CELL = 200
 
 
 def neighbour_offsets(dim: int, connectivity: str = "full") -> np.ndarray:
@@ -235,6 +245,16 @@ def _occupancy(world_or_grid: World | OccupancyGrid) -> OccupancyGrid | None:
     raise TypeError(f"expected a World or an OccupancyGrid, not {type(world_or_grid).__name__}")
 
 
+def planning_shape(size_m: np.ndarray, cell_m: float) -> np.ndarray:
+    """Cells per axis of the planning grid of cell ``cell_m`` over ``size_m``, as floats.
+
+    Floats, so that a tiny ``cell_m`` gives a huge (or infinite) count to refuse,
+    not an integer overflow; :func:`planning_grid` uses the same numbers.
+    """
+    with np.errstate(over="ignore", divide="ignore"):
+        return np.maximum(np.ceil(np.asarray(size_m, dtype=float) / cell_m - 1e-9), 1)
+
+
 def planning_grid(
     world_or_grid: World | OccupancyGrid, *, cell_m: float, inflate_m: float | None = None
 ) -> OccupancyGrid:
@@ -281,7 +301,7 @@ def planning_grid(
     grid = _occupancy(world_or_grid)
     if grid is None:
         raise ValueError("the world has no occupancy grid to plan on (free space)")
-    shape = tuple(np.maximum(np.ceil(grid.size_m / cell_m - 1e-9), 1).astype(int))
+    shape = tuple(planning_shape(grid.size_m, cell_m).astype(int))
     plan = OccupancyGrid(np.ones(shape, dtype=bool), cell_m, grid.origin_m.copy())
     centres = plan.to_world(np.indices(shape).reshape(grid.dim, -1).T)
     fine = grid.to_cell(centres)
