@@ -474,6 +474,11 @@ CASES: dict[str, Case] = {
         _set("strategy.params.estimator", {"delay_rounds": 1_000_000_000}),
         base=connectivity,
     ),
+    "multi_target: a billion message rounds per step": Case(
+        "strategy.params.messages.rounds_per_step",
+        _set("strategy.params.messages", {"rounds_per_step": 1_000_000_000}),
+        base=lambda tmp: _builtin("multi_target_empty"),
+    ),
     "sweep: a billion seeds (refused before any list is made)": Case(
         "sweep.seeds",
         _set("sweep", {"strategy.params.d0_m": [5.0, 8.0], "seeds": 1_000_000_000}),

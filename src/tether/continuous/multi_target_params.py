@@ -10,7 +10,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from tether.continuous.params import TRAVEL_TABLE2
-from tether.continuous.strategy import ConnectivityStrategyParams
+from tether.continuous.strategy import MAX_DELAY_ROUNDS, MAX_ROUNDS, ConnectivityStrategyParams
 from tether.continuous.targets import height_range
 
 
@@ -28,9 +28,9 @@ class TargetsConfig(_Strict):
 class MessagesConfig(_Strict):
     """Faults of the message layer the election and the consensus talk through."""
 
-    rounds_per_step: int = Field(default=1, ge=1)
+    rounds_per_step: int = Field(default=1, ge=1, le=MAX_ROUNDS)
     loss_probability: float = Field(default=0.0, ge=0, lt=1)
-    delay_rounds: int = Field(default=0, ge=0)
+    delay_rounds: int = Field(default=0, ge=0, le=MAX_DELAY_ROUNDS)
 
 
 class StartConfig(_Strict):

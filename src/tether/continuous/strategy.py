@@ -72,7 +72,7 @@ class ExternalForce(_Strict):
     gain_n_per_m: float = Field(default=1.0, ge=0)
 
 
-MAX_ROUNDS = 10_000  # estimator rounds per integrator sub-step
+MAX_ROUNDS = 10_000  # message rounds per sub-step (estimator) or control step (multi_target)
 MAX_WARMUP_ROUNDS = 1_000_000  # about 70 s for 35 robots
 MAX_DELAY_ROUNDS = 1_000
 
