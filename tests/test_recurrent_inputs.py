@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests._cli import tether
 
+from _cli import tether
 from tether.config import load_scenario
 from tether.recurrent.exploration.sim import ExplorationConfig, ExplorationSim, GoalKind
 
@@ -67,8 +67,9 @@ def test_sensing_range_minimum_grows_with_the_coarse_cell(capsys, tmp_path):
     _runs(capsys, tmp_path, "recurrent_demo", sets[0], f"sensing.range_m={least}")
 
 
-def test_utility_needs_no_known_bs_cell(capsys, tmp_path):
+def test_utility_needs_no_known_bs_cell(capsys, tmp_path, monkeypatch):
     """The check is the recurrent planner's only: the baseline runs with a short range."""
+    monkeypatch.chdir(ROOT)  # the scenario's map is ../shared/maps from the checkout
     _runs(capsys, tmp_path, "recurrent_utility", "sensing.range_m=0.05")
 
 
