@@ -116,3 +116,26 @@ def test_an_output_path_that_is_not_a_run_folder_is_refused(tmp_path, kind):
     with pytest.raises(OutputError, match="mine"):
         run(tiny(), out_dir=out)
     assert "precious" in (out.read_text() if kind == "file" else (out / "notes.txt").read_text())
+
+
+def test_a_parent_removed_by_a_concurrent_abort_is_made_again(tmp_path, monkeypatch):
+    """In a sweep, one trial's abort can remove the combination folder it made while another
+    trial of that combination is between making it and making its staging folder (a CI
+    failure: "cannot create the run folder (No such file or directory)")."""
+    import tempfile as tempfile_module
+
+    from tether.runfolder import RunFolder
+
+    real = tempfile_module.mkdtemp
+    removed: list[bool] = []
+
+    def racing_mkdtemp(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        if not removed:  # the other trial's abort runs right now
+            removed.append(True)
+            kwargs["dir"].rmdir()
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(tempfile_module, "mkdtemp", racing_mkdtemp)
+    folder = RunFolder(tmp_path / "combo" / "seed-2")
+    assert removed and folder.staging.is_dir()
+    assert folder.staging.parent == tmp_path / "combo"

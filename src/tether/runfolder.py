@@ -184,10 +184,7 @@ class RunFolder:
             while not parent.exists() and parent != parent.parent:
                 self._created.append(parent)
                 parent = parent.parent
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.staging = Path(
-                tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.staging-")
-            )
+            self.staging = self._make_staging()
         except OSError as exc:
             self._remove_created()
             raise OutputError(
@@ -196,6 +193,23 @@ class RunFolder:
             ) from None
         os.chmod(self.staging, 0o777 & ~_UMASK)
         self.written: list[str] = []
+
+    def _make_staging(self, tries: int = 5) -> Path:
+        """The staging folder beside :attr:`path`, its parents made as needed.
+
+        In a sweep, another trial's run folder in the same parent may be aborted at the
+        same moment and remove the parent it made (:meth:`abort`) between our ``mkdir``
+        and ``mkdtemp``: then the parent is made again.
+        """
+        prefix = f".{self.path.name}.staging-"
+        for _ in range(tries - 1):
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            try:
+                return Path(tempfile.mkdtemp(dir=self.path.parent, prefix=prefix))
+            except FileNotFoundError:
+                continue
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        return Path(tempfile.mkdtemp(dir=self.path.parent, prefix=prefix))
 
     def _remove_created(self) -> None:
         for folder in self._created:  # deepest first
