@@ -90,7 +90,7 @@ def trials_of(
     seed_list = seeds_of(scenario, seeds)
     axes = check_sweep(scenario, strategy_class(scenario))
     combos = sweep_spec(scenario).combinations(axes)
-    if len(combos) * len(seed_list) > MAX_SWEEP_TRIALS:  # the block's seeds: when parsed
+    if len(combos) * len(seed_list) > MAX_SWEEP_TRIALS:  # for --seeds (the block's: parsed)
         raise TetherError(
             f"{scenario.source}: sweep: {len(combos):,} combinations x {len(seed_list):,} seeds = "
             f"{len(combos) * len(seed_list):,} trials; at most {MAX_SWEEP_TRIALS:,} "

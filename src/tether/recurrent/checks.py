@@ -19,8 +19,8 @@ from tether.sensing.depth import cast_rays
 CELL_QUANTUM = 1e-9
 #: ``ExplorationSim._move`` advances a robot only while its budget exceeds 1e-9 cells
 MIN_STEP_CELLS = 2e-9
-#: samples of one depth scan (as ``strategy.MAX_RAY_SAMPLES``)
-_MAX_SAMPLES = 4_000_000
+#: samples of one full depth scan (rays x samples per ray) a scenario may ask for
+MAX_RAY_SAMPLES = 4_000_000
 
 
 def coarse_factor(params: Any, scenario: Any, resolution_m: float, shape: Any) -> int:
@@ -100,7 +100,7 @@ def check_base_sensed(
         "known cell to plan from"
     )
     rays = int(np.ceil(360.0 / params.sensor_resolution_deg)) + 1
-    top = min(reach, np.floor((_MAX_SAMPLES / rays - 1) * 0.5 / 0.5) * 0.5)
+    top = min(reach, np.floor(MAX_RAY_SAMPLES / rays - 1) * 0.5)  # the longest scan allowed
     if top <= range_cells or not _covers(factor, top, params.sensor_resolution_deg):
         raise ScenarioError(
             f"{field}: {what}; lower strategy.params.coarse_cell_m or "

@@ -30,6 +30,7 @@ from tether.limits import format_bytes, memory_budget_bytes
 from tether.paths.geodesic import CoarseGrid
 from tether.recurrent import checks
 from tether.recurrent.baseline_utility import UtilityStrategy
+from tether.recurrent.checks import MAX_RAY_SAMPLES
 from tether.recurrent.exploration.run import ExplorationRun
 from tether.recurrent.exploration.sim import (
     ExplorationConfig,
@@ -134,10 +135,6 @@ class UtilityParams(ExplorationParams):
         description="greedy: joint best-pair assignment inside communicating groups "
         "(de Hoog et al.'s MRESim); none: every robot on its own",
     )
-
-
-#: samples of one full depth scan (rays x samples per ray) a scenario may ask for
-MAX_RAY_SAMPLES = 4_000_000
 
 
 def _config(
