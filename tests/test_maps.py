@@ -251,6 +251,16 @@ def test_yaml_fields_are_honoured(tmp_path: Path) -> None:
     np.testing.assert_array_equal(over.origin_m, [0.0, 0.0])
 
 
+def test_exponent_floats_in_a_map_yaml_are_numbers(tmp_path: Path) -> None:
+    """ROS's yaml-cpp (YAML 1.2) reads ``resolution: 5e-2`` as a number; so do we."""
+    Image.fromarray(np.array([[0, 255]], dtype=np.uint8)).save(tmp_path / "m.png")
+    path = tmp_path / "m.yaml"
+    path.write_text("image: m.png\nresolution: 5e-2\norigin: [1e1, 0, 0]\n")
+    grid = load_map(path)
+    assert grid.resolution_m == 0.05
+    np.testing.assert_array_equal(grid.origin_m, [10.0, 0.0])
+
+
 def test_raw_mode_reads_percent_occupancy(tmp_path: Path) -> None:
     pixels = np.array([[0, 10, 50, 70, 100, 255]], dtype=np.uint8)
     Image.fromarray(pixels).save(tmp_path / "raw.png")

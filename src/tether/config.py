@@ -312,12 +312,12 @@ def _check_expansion(data: Any, label: str) -> None:
         ) from None
 
 
-class _Loader(yaml.SafeLoader):
+class YamlLoader(yaml.SafeLoader):
     """PyYAML's safe loader, with YAML 1.2's exponent floats (``1e-6``, ``2.5e3``): YAML
     1.1, which PyYAML follows, reads them as strings unless they have a dot and a sign."""
 
 
-_Loader.add_implicit_resolver(
+YamlLoader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
     re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$"),
     list("-+0123456789."),
@@ -326,9 +326,9 @@ _Loader.add_implicit_resolver(
 
 def parse_yaml(text: str | bytes, label: str) -> Any:
     """``yaml.safe_load`` bounded in time and memory, with one-line errors naming ``label``
-    (exponent floats as in YAML 1.2: :class:`_Loader`)."""
+    (exponent floats as in YAML 1.2: :class:`YamlLoader`)."""
     try:
-        data = yaml.load(text, Loader=_Loader)  # noqa: S506 (a SafeLoader)
+        data = yaml.load(text, Loader=YamlLoader)  # noqa: S506 (a SafeLoader)
     except yaml.YAMLError as exc:
         raise ScenarioError(f"{label}: {_yaml_problem(exc)}") from None
     except RecursionError:

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from tether.config import MAX_LENGTH_M
+from tether.config import MAX_LENGTH_M, YamlLoader
 from tether.errors import MapError
 from tether.world.grid import OccupancyGrid
 from tether.world.images import read_image
@@ -171,7 +171,7 @@ def _thresholds(source: Path, occupied: Any, free: Any) -> tuple[float, float]:
 
 def _read_yaml(path: Path) -> dict[str, Any]:
     try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        doc = yaml.load(path.read_text(encoding="utf-8"), Loader=YamlLoader)  # noqa: S506 (safe)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
