@@ -120,22 +120,40 @@ def test_random_pulls_keep_the_invariants(name: str, block: int) -> None:
     assert stretched > 0  # the pulls did pull the teams apart
 
 
-def test_safeguard_rejects_a_round_off_lambda2() -> None:
-    """A candidate whose lambda2 is positive only at round-off level is not accepted."""
+class _Constant:
+    """A System with a constant force whose lambda2 is 0.5 at the start and round-off after."""
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def evaluate(self, q: np.ndarray) -> tuple[float, None]:
+        self.calls += 1
+        return (0.5, None) if self.calls == 1 else (1e-16, None)
+
+    def forces(self, q: np.ndarray, v: np.ndarray, cache: None) -> tuple:
+        return np.ones_like(q), np.zeros_like(q), np.inf
+
+    def accept(self, q: np.ndarray, v: np.ndarray, cache: None) -> bool:
+        return False
+
+    def neighbours(self, cache: None) -> np.ndarray:
+        return np.zeros((0, 2), dtype=int)
+
+    def potential(self, lambda2: float) -> float:
+        return 0.0
+
+
+def test_enforce_rejects_a_round_off_lambda2_and_detect_counts_it() -> None:
+    """A candidate whose lambda2 is positive only at round-off level left the safe set."""
     from tether.continuous.dynamics import IntegratorParams, integrate
 
-    q = np.zeros((3, 2))
-    v = np.zeros((3, 2))
-    calls = []
-
-    def evaluate(x: np.ndarray) -> tuple[float, None]:
-        calls.append(x.copy())
-        return (0.5, None) if len(calls) == 1 else (1e-16, None)
-
-    q1, v1, ev, stats = integrate(
-        q, v, 0.1, evaluate, lambda _: np.zeros((3, 2)), np.ones((3, 2)),
-        IntegratorParams(max_halvings=3), lambda2_min=0.0,
-    )  # fmt: skip
-    assert stats.stalled and stats.rejections == 4 and ev[0] == 0.5
+    q, v = np.zeros((3, 2)), np.zeros((3, 2))
+    params = IntegratorParams(guard="enforce", max_retries=3)
+    q1, v1, ev, stats = integrate(q, v, 0.1, _Constant(), params, lambda2_min=0.0)
+    assert stats.stalls == 1 and stats.guard_interventions == 4 and ev[0] == 0.5
     np.testing.assert_array_equal(q1, q)
     np.testing.assert_array_equal(v1, 0.0)
+    params = IntegratorParams(guard="detect")
+    q1, v1, ev, stats = integrate(q, v, 0.1, _Constant(), params, lambda2_min=0.0)
+    assert stats.guard_interventions == 0 and stats.safe_set_exits == stats.substeps >= 1
+    np.testing.assert_allclose(v1, 0.1 / (1 + 0.1 * 2.0))  # one step: nothing vetoed

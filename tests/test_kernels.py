@@ -185,14 +185,15 @@ def test_fused_substep_force_is_the_chain() -> None:
     assert (s.planner.role == SECONDARY).any()  # travelers with rho(Theta, Lambda_hat)
     held, cache = s._anchors(), s._current[1]
     with jit.using(False):
-        f_lambda = s._force(cache)
+        f_lambda = s.connectivity_force(cache)
         ref = f_lambda + traveling_forces(q, v, f_lambda, s.planner, s.consensus.estimate,
                                           s.params, anchors=held)  # fmt: skip
         ref_h = displacement_step(v, ref, s.integ.mass_kg, s.integ.max_step_m)
     with jit.using(True):
         args = travel_args(s.planner, s.consensus.estimate, s.params, held)
-        total, h = fused_total_force(s, args, travel_gains(s.params))(q, v, cache)
+        total, f_lam, h = fused_total_force(s, args, travel_gains(s.params))(q, v, cache)
     assert_same(total, ref)
+    assert_same(f_lam, f_lambda)
     assert h == ref_h
     # an external force changed after the traveling force (rows replaced): the same too
     rows = np.array([0, 3, 5])
@@ -203,13 +204,13 @@ def test_fused_substep_force_is_the_chain() -> None:
         return f_ext
 
     with jit.using(False):
-        f_lambda = s._force(cache)
+        f_lambda = s.connectivity_force(cache)
         f_ext = traveling_forces(q, v, f_lambda, s.planner, s.consensus.estimate, s.params,
                                  anchors=held)  # fmt: skip
         ref = f_lambda + adjust(q, v, f_lambda, f_ext)
         ref_h = displacement_step(v, ref, s.integ.mass_kg, s.integ.max_step_m)
     with jit.using(True):
-        total, h = fused_total_force(s, args, travel_gains(s.params), adjust)(q, v, cache)
+        total, _, h = fused_total_force(s, args, travel_gains(s.params), adjust)(q, v, cache)
     assert_same(total, ref)
     assert h == ref_h
 

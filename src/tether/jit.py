@@ -39,6 +39,7 @@ KERNEL_MODULES = (
     "continuous/kernels.py",
     "continuous/tracking_kernels.py",
     "continuous/force_kernels.py",
+    "continuous/dynamics_kernels.py",
     "continuous/pair_kernels.py",
     "graph/lapack_kernels.py",
     "continuous/round_kernels.py",

@@ -2,11 +2,8 @@
 
 The fast paths of :func:`tether.continuous.gradient.edge_energy`,
 :func:`~tether.continuous.gradient.lambda2_gradient` and
-:func:`~tether.continuous.gradient.connectivity_force` (eqs. (17)-(18)), of the
-integrator's :func:`~tether.continuous.dynamics.semi_implicit_euler` with
-:func:`~tether.continuous.dynamics.stay_inside` and
-:func:`~tether.continuous.dynamics.displacement_step`, each in its reference's
-arithmetic and order (same bits; ``tests/test_kernels.py``).
+:func:`~tether.continuous.gradient.connectivity_force` (eqs. (17)-(18)), each in its
+reference's arithmetic and order (same bits; ``tests/test_kernels.py``).
 
 :func:`total_force_kernel` is one ``multi_target`` sub-step's total force and step:
 the reference is a chain of calls (``connectivity_force``, then
@@ -18,11 +15,10 @@ bits.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
+from tether.continuous.dynamics_kernels import displacement_kernel
 from tether.continuous.tracking_kernels import traveling_kernel
 
 
@@ -107,46 +103,6 @@ def exact_force_kernel(  # noqa: ANN201, PLR0913
 
 
 @njit(cache=True)
-def euler_kernel(q, v, force, h, mass, damping, box, margin):  # noqa: ANN001, ANN201
-    """:func:`~tether.continuous.dynamics.semi_implicit_euler`, then
-    :func:`~tether.continuous.dynamics.stay_inside` if ``box`` has two rows."""
-    n, dim = q.shape
-    q_new = np.empty((n, dim))
-    v_new = np.empty((n, dim))
-    for r in range(n):
-        for c in range(dim):
-            vn = (mass * v[r, c] + h * force[r, c]) / (mass + h * damping)
-            qn = q[r, c] + h * vn
-            if len(box) == 2:
-                lo = min(box[0, c] + margin, q[r, c])
-                hi = max(box[1, c] - margin, q[r, c])
-                clipped = min(max(qn, lo), hi)
-                if clipped != qn:
-                    vn = 0.0
-                qn = clipped
-            q_new[r, c] = qn
-            v_new[r, c] = vn
-    return q_new, v_new
-
-
-@njit(cache=True)
-def displacement_kernel(v, force, mass, delta):  # noqa: ANN001, ANN201
-    """:func:`~tether.continuous.dynamics.displacement_step` (``inf`` if nothing moves)."""
-    n, dim = v.shape
-    vmax, fmax = 0.0, 0.0
-    for r in range(n):
-        sv, sf = 0.0, 0.0
-        for c in range(dim):
-            sv += v[r, c] * v[r, c]
-            sf += force[r, c] * force[r, c]
-        vmax = max(vmax, math.sqrt(sv))
-        fmax = max(fmax, math.sqrt(sf))
-    disc = vmax * vmax + 4.0 * delta * fmax / mass
-    denom = vmax + math.sqrt(disc)
-    return np.inf if denom <= 0 else 2.0 * delta / denom
-
-
-@njit(cache=True)
 def total_force_kernel(  # noqa: ANN201, PLR0913
     q, v, graph, nu, lam, potential, travel, trav, secondary, lambda_hat, held, targets, path,
     v_cruise, tie, order, mass, delta,
@@ -157,7 +113,7 @@ def total_force_kernel(  # noqa: ANN201, PLR0913
     ``graph``: ``(pairs, pair_factor, collision, dP_di, dP_dj, coll_pairs, coll_unit,
     coll_logd)`` of a :class:`~tether.continuous.weights.WeightedGraph`; ``nu``, ``lam``
     its Fiedler vector and lambda2; ``potential``: ``(lambda2_min, lambda2_null, gain)``;
-    ``travel``: ``(kp, kv, mass, damping, max_force, sigma, rz, kz)`` and the other
+    ``travel``: ``(kp, kv, mass, damping, max_force, sigma, rz, kz, anchor_max)`` and the other
     arguments as :func:`~tether.continuous.tracking_kernels.traveling_kernel` takes them;
     ``mass``, ``delta``: the displacement rule's (``inf`` step if nothing moves).
     """
@@ -167,10 +123,10 @@ def total_force_kernel(  # noqa: ANN201, PLR0913
     grad = gradient_kernel(n, pairs, dP_di, dP_dj, coll_pairs, coll_unit, coll_logd, nu,
                            collision, energy)  # fmt: skip
     f_lambda = force_kernel(grad, np.full(n, lam), potential[0], potential[1], potential[2])
-    kp, kv, m_t, b_t, max_force, sigma, rz, kz = travel
+    kp, kv, m_t, b_t, max_force, sigma, rz, kz, anchor_max = travel
     f_ext = traveling_kernel(
         q, v, f_lambda, trav, secondary, lambda_hat, held, targets, path, v_cruise, tie, order,
-        kp, kv, m_t, b_t, max_force, sigma, rz, kz,
+        kp, kv, m_t, b_t, max_force, sigma, rz, kz, anchor_max,
     )  # fmt: skip
     total = f_lambda + f_ext
     return total, displacement_kernel(v, total, mass, delta), f_lambda, f_ext
@@ -185,14 +141,10 @@ def warm_up(q: np.ndarray, pairs: np.ndarray, graph: tuple, nu: np.ndarray) -> N
     grad = gradient_kernel(n, pairs, dP_di, dP_dj, cp, cu, cl, nu, coll, energy)
     force_kernel(grad, np.full(n, 0.1), 0.0, 0.5, 1.0)
     exact_force_kernel(n, pairs, pf, coll, dP_di, dP_dj, cp, cu, cl, nu, 0.1, 0.0, 0.5, 1.0)
-    box = np.array([[-10.0, -10.0, 0.0], [10.0, 10.0, 5.0]])
-    for corners in (box, np.zeros((0, 3))):
-        euler_kernel(q, q, q, 0.01, 1.0, 2.0, corners, 0.75)
-    displacement_kernel(q, q, 1.0, 0.1)
     i0, f1, f2 = np.zeros(1, np.int64), np.zeros(0), np.zeros((0, 3))
     no_paths = (i0, f2, f2, f1, f1, f1, f2, f2, f2, f2, f1, f1, f1, i0[:0])
     arrays = (pairs, pf, coll, dP_di, dP_dj, cp, cu, cl)
-    travel = (4.0, 4.0, 1.0, 2.0, 10.0, 3.0, 1.8, 1.0)
+    travel = (4.0, 4.0, 1.0, 2.0, 10.0, 3.0, 1.8, 1.0, np.inf)
     held = np.arange(1, dtype=np.int64)
     total_force_kernel(q, q, arrays, nu, 0.1, (0.0, 0.5, 1.0), travel, i0[:0],
                        np.zeros(0, np.bool_), np.zeros(n), held, q[:1].copy(), no_paths, 3.0,

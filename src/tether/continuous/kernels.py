@@ -393,6 +393,7 @@ def warm_up() -> float:
                                              (0.0, 0.5, 1.0), True)  # fmt: skip
     # every other kernel module's warm-up (imports here: numba only once asked for)
     from tether.comm_kernels import warm_up as comm
+    from tether.continuous.dynamics_kernels import warm_up as dynamics
     from tether.continuous.round_kernels import warm_up as rounds
     from tether.graph.grid_kernels import warm_up as grid
     from tether.graph.link_kernels import warm_up as links
@@ -408,8 +409,8 @@ def warm_up() -> float:
     from tether.sensing.robots_kernels import warm_up as sensing
     from tether.silent.steering_kernels import warm_up as steering
 
-    for module_warm_up in (rounds, comm, steiner, ilp, steering, sensing, draws, grid, metrics,
-                           astar, links, geodesic, expgraph, depth, apx):  # fmt: skip
+    for module_warm_up in (dynamics, rounds, comm, steiner, ilp, steering, sensing, draws, grid,
+                           metrics, astar, links, geodesic, expgraph, depth, apx):  # fmt: skip
         module_warm_up()
     small_fiedler_kernel(np.array([[1.0, -1.0], [-1.0, 1.0]]), nu[:2].copy(), *small.SETTINGS)
     seconds = time.perf_counter() - start

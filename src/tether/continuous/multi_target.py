@@ -27,7 +27,7 @@ import numpy as np
 from tether import floats, jit
 from tether.comm import CommParams, MessageLayer
 from tether.continuous.consensus import EfficiencyConsensus
-from tether.continuous.dynamics import integrate
+from tether.continuous.dynamics import displacement_step
 from tether.continuous.election import Election
 from tether.continuous.multi_target_checks import check_planning_grid, target_book
 from tether.continuous.multi_target_params import MultiTargetParams
@@ -87,7 +87,7 @@ def traveling_forces(
         f[trav] = scale[:, None] * ft
     held, targets = anchors
     if len(held):
-        f[held] = anchor_force(q[held], targets, p.rz_m, p.kz_n)
+        f[held] = anchor_force(q[held], targets, p.rz_m, p.kz_n, p.anchor_force_bound_n())
     return f
 
 
@@ -163,9 +163,10 @@ def travel_args(
 
 
 def travel_gains(p: MultiTargetParams) -> tuple[float, ...]:
-    """``(kp, kv, mass, damping, max_force, sigma, Rz, kz)`` as the traveling kernel takes them."""
+    """``(kp, kv, mass, damping, max_force, sigma, Rz, kz, anchor_max)`` as the traveling
+    kernel takes them."""
     return (p.kp_n_per_m, p.kv_ns_per_m, p.mass_kg, p.damping_ns_per_m, p.max_travel_force_n,
-            p.sigma, p.rz_m, p.kz_n)  # fmt: skip
+            p.sigma, p.rz_m, p.kz_n, p.anchor_force_bound_n())  # fmt: skip
 
 
 _ROLE_ARRAY = np.array(ROLE_NAMES)  # role names by role code
@@ -253,7 +254,9 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._prime_eff = 1.0
         self._held: tuple[np.ndarray, np.ndarray] | None = None
         self._last_links: np.ndarray | None = None
-        self._current = self._evaluate(state.positions)
+        self._external = self._fused = None
+        self._anchor_outside_steps = 0
+        self._current = self.evaluate(state.positions)
 
     def _anchors(self) -> tuple[np.ndarray, np.ndarray]:
         """The anchored robots and their targets (fixed while a period is integrated)."""
@@ -262,12 +265,23 @@ class MultiTargetStrategy(ConnectivityStrategy):
         held = np.flatnonzero(self.planner.anchored())
         return held, _targets(self.planner, held, self.world.dim)
 
-    def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
-        lam, cache = super()._evaluate(q)
-        held, targets = self._anchors()
-        if len(held) and _anchor_leaves(q, held, targets, self.params.rz_m):
-            return -np.inf, cache  # an anchor would leave its ball: reject the sub-step
+    def evaluate(self, q: np.ndarray) -> tuple[float, Any]:
+        lam, cache = super().evaluate(q)
+        if self.params.guard == "enforce":  # the anchor's ball is part of what it enforces
+            held, targets = self._anchors()
+            if len(held) and _anchor_leaves(q, held, targets, self.params.rz_m):
+                return -np.inf, cache
         return lam, cache
+
+    def forces(self, q: np.ndarray, v: np.ndarray, cache: Any) -> tuple:
+        """``(f_lambda + f_i, f_lambda, displacement step)``: Algorithm 2's ``f_i`` this
+        period (:func:`traveling_forces`, helpers), in one compiled call when it can."""
+        if self._fused is not None:
+            return self._fused(q, v, cache)
+        f_lambda = self.connectivity_force(cache)
+        total = f_lambda + self._external(q, v, f_lambda)
+        return total, f_lambda, displacement_step(v, total, self.integ.mass_kg,
+                                                  self.integ.max_step_m)  # fmt: skip
 
     # -- one control period ------------------------------------------------------------
     def _links(self) -> np.ndarray:
@@ -363,29 +377,23 @@ class MultiTargetStrategy(ConnectivityStrategy):
                                  anchors=self._held)  # fmt: skip
             return helped(qq, vv, f, f_lambda) if len(helpers) else f
 
-        fused = None
+        self._external, self._fused = external, None
         if jit.enabled() and self.estimator is None:  # one compiled call per sub-step
 
             def adjust(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray,
                        f_ext: np.ndarray) -> np.ndarray:  # fmt: skip
                 return helped(qq, vv, f_ext, f_lambda)
 
-            fused = fused_total_force(self, travel_args(self.planner, self.consensus.estimate,
-                                                        self.params, self._held),
-                                      travel_gains(self.params),
-                                      adjust if len(helpers) else None)  # fmt: skip
+            self._fused = fused_total_force(self, travel_args(self.planner,
+                                                              self.consensus.estimate,
+                                                              self.params, self._held),
+                                            travel_gains(self.params),
+                                            adjust if len(helpers) else None)  # fmt: skip
         try:
-            q_new, v_new, ev, stats = integrate(
-                q, v, ctx.dt_s, self._evaluate, self._force, external, self.integ,
-                self.conn.lambda2_min, self._current, box=self.world.bounds_m,
-                box_margin_m=self.conn.ro_m, total_force=fused,
-            )  # fmt: skip
+            q_new, v_new, ev, stats = self.integrate(q, v, ctx.dt_s, self)
         finally:
             self._held = None
-        self._current = ev
-        self._stats["substeps"] += stats.substeps
-        self._stats["rejections"] += stats.rejections
-        self._stats["stalls"] += int(stats.stalled)
+            self._external = self._fused = None
         graph, lam, nu = ev[1]
         self._observe(q_new, graph, lam, nu)
         self._bookkeep(q, q_new, float(lam), (ctx.step + 1) * ctx.dt_s, ctx.dt_s)

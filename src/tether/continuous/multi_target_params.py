@@ -10,7 +10,11 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from tether.continuous.params import TRAVEL_TABLE2
-from tether.continuous.strategy import MAX_DELAY_ROUNDS, MAX_ROUNDS, ConnectivityStrategyParams
+from tether.continuous.strategy_params import (
+    MAX_DELAY_ROUNDS,
+    MAX_ROUNDS,
+    ConnectivityStrategyParams,
+)
 from tether.continuous.targets import height_range
 
 
@@ -96,6 +100,11 @@ class MultiTargetParams(ConnectivityStrategyParams):
         description="a helper's connectivity force is scaled by this (None: not scaled)",
     )  # fmt: skip
     max_travel_force_n: float = Field(default=10.0, gt=0)
+    max_anchor_force_n: float | None = Field(
+        default=None, gt=0,
+        description="saturate the anchor force of eq. (7) (None: the paper's law, unbounded "
+        "at Rz, so the ball is a barrier)",
+    )  # fmt: skip
     election_criterion: Literal["path_length", "distance"] = "path_length"
     messages: MessagesConfig = Field(default_factory=MessagesConfig)
     start: StartConfig = Field(default_factory=StartConfig)
@@ -114,4 +123,15 @@ class MultiTargetParams(ConnectivityStrategyParams):
     def _bands(self) -> MultiTargetParams:
         if not self.xc_frac < self.xm_frac:
             raise ValueError("need xc_frac < xm_frac (the efficiency band of eq. (9))")
+        if not self.v_cruise_mps < self.speed_bound_mps():
+            raise ValueError(
+                f"v_cruise_mps = {self.v_cruise_mps} must be below the robots' top speed "
+                f"max_speed_mps = {self.speed_bound_mps()}; raise max_speed_mps"
+            )
         return self
+
+    def cruise_speed_mps(self) -> float:
+        return self.v_cruise_mps
+
+    def anchor_force_bound_n(self) -> float:
+        return float("inf") if self.max_anchor_force_n is None else self.max_anchor_force_n

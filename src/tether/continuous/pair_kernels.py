@@ -206,7 +206,7 @@ def any_row_beyond(q, rows, targets, r):  # noqa: ANN001, ANN201
     """``numpy.any(numpy.linalg.norm(q[rows] - targets, axis=1) >= r)``, the same
     distances (:func:`row_norm`) without numpy's per-call overhead.
 
-    The anchor test of :meth:`tether.continuous.multi_target.MultiTargetStrategy._evaluate`
+    The anchor test of :meth:`tether.continuous.multi_target.MultiTargetStrategy.evaluate`
     (an anchor must stay within ``Rz`` of its target, Nestmeyer et al. 2017, Sec. 4).
     """
     dim = q.shape[1]

@@ -25,17 +25,19 @@ Example scenario (``src/tether/scenarios/connectivity_town.yaml``)::
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from tether import jit
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.dynamics import IntegratorParams, integrate
-from tether.continuous.estimation import EstimatorParams, FiedlerEstimator, estimate_errors
+from tether.continuous.dynamics import IntegrationStats, StepMemory, displacement_step, integrate
+from tether.continuous.estimation import FiedlerEstimator, estimate_errors
+from tether.continuous.external import check_external, external_force
 from tether.continuous.gradient import connectivity_force, exact_force, messages
-from tether.continuous.params import TABLE2, ConnectivityParams
+from tether.continuous.params import ConnectivityParams
+from tether.continuous.potential import potential
+from tether.continuous.strategy_params import ConnectivityStrategyParams
 from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
 from tether.graph.warm import WarmState
@@ -43,185 +45,6 @@ from tether.registry import STRATEGIES
 from tether.sim import StepContext, Strategy, TeamState
 from tether.world.clearance import ObstacleIndex
 from tether.world.world import World
-
-_OUTDOOR = TABLE2["outdoor"]
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-
-
-class ExternalForce(_Strict):
-    """The external force ``f_i`` of eq. (1), bounded by ``magnitude_n`` per robot.
-
-    ``none``; ``constant`` (``forces``: one vector for all robots or one per
-    robot); ``goal`` (operator commands: ``robots`` are pulled towards
-    ``goals`` by ``gain * (goal - q)``, saturated); ``random`` (each robot a
-    uniformly random direction and a magnitude uniform in
-    ``[0, magnitude_n]``, redrawn every ``hold_s``; ``planar`` keeps them
-    horizontal in 3-D).
-    """
-
-    kind: Literal["none", "constant", "goal", "random"] = "none"
-    magnitude_n: float = Field(default=1.0, ge=0)
-    hold_s: float = Field(default=2.0, gt=0)
-    planar: bool = False
-    forces: list[list[float]] | None = None
-    robots: list[int] = Field(default_factory=list)
-    goals: list[list[float]] = Field(default_factory=list)
-    gain_n_per_m: float = Field(default=1.0, ge=0)
-
-
-MAX_ROUNDS = 10_000  # message rounds per sub-step (estimator) or control step (multi_target)
-MAX_WARMUP_ROUNDS = 1_000_000  # about 70 s for 35 robots
-MAX_DELAY_ROUNDS = 1_000
-
-
-class EstimatorConfig(EstimatorParams):
-    """Decentralized estimator (its gains), rounds and message-layer faults."""
-
-    model_config = ConfigDict(extra="forbid", frozen=False, allow_inf_nan=False)
-
-    # the caps bound the work and the messages held in flight (about 20 kB per round of
-    # delay for 35 robots); far above the paper's few rounds
-    rounds_per_substep: int = Field(default=20, ge=1, le=MAX_ROUNDS)
-    warmup_rounds: int = Field(default=3000, ge=0, le=MAX_WARMUP_ROUNDS)
-    loss_probability: float = Field(default=0.0, ge=0, lt=1)
-    delay_rounds: int = Field(default=0, ge=0, le=MAX_DELAY_ROUNDS)
-    failures: dict[int, int] = Field(default_factory=dict)
-
-
-class ConnectivityStrategyParams(_Strict):
-    """Parameters of strategy ``connectivity``.
-
-    ``preset`` picks a column of Table 2 (``outdoor`` = empty space and town,
-    ``office``, ``experiment`` = Sec. 4.2); any parameter given explicitly
-    overrides the preset. The other Table 2 entries (``Rgrid``, ``sigma``,
-    ``v_cruise``, ``(x_c, x_M)``, ``Delta t``, ``Rz``) belong to the traveling
-    force of Algorithms 1-2 and are not used here.
-    """
-
-    preset: Literal["outdoor", "office", "experiment"] = "outdoor"
-    rs_inner_m: float = Field(default=_OUTDOOR["rs_inner_m"], gt=0)
-    rs_m: float = Field(default=_OUTDOOR["rs_m"], gt=0)
-    ro_m: float = Field(default=_OUTDOOR["ro_m"], gt=0)
-    ro_outer_m: float = Field(default=_OUTDOOR["ro_outer_m"], gt=0)
-    rc_m: float = Field(default=_OUTDOOR["rc_m"], gt=0)
-    rc_outer_m: float = Field(default=_OUTDOOR["rc_outer_m"], gt=0)
-    lambda2_min: float = Field(default=_OUTDOOR["lambda2_min"], ge=0)
-    lambda2_null: float = Field(default=_OUTDOOR["lambda2_null"], gt=0)
-    potential_gain_n: float = Field(default=1.0, gt=0)
-    mass_kg: float = Field(default=1.0, gt=0)
-    damping_ns_per_m: float = Field(default=2.0, ge=0)
-    max_step_fraction: float = Field(default=0.1, gt=0, le=1)
-    keep_fraction: float = Field(default=0.5, ge=0, lt=1)
-    safeguard: bool = True
-    eigensolver: Literal["exact", "estimator"] = "exact"
-    #: exact lambda2 from the previous Fiedler vector: ``auto`` = the certified small
-    #: dense solver for 17-400 robots (LAPACK when it cannot certify); ``lapack`` = LAPACK
-    #: every sub-step (the same eigenpair; trajectories as before it, bit for bit)
-    fiedler_method: Literal["auto", "lapack"] = "auto"
-    estimator: EstimatorConfig = Field(default_factory=EstimatorConfig)
-    external: ExternalForce = Field(default_factory=ExternalForce)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _apply_preset(cls, data: Any) -> Any:
-        if isinstance(data, dict):
-            preset = data.get("preset", "outdoor")
-            if preset in TABLE2:
-                data = {**TABLE2[preset], **data}
-        return data
-
-    @model_validator(mode="after")
-    def _consistent(self) -> ConnectivityStrategyParams:
-        try:  # ValueError such as "need 0 < R's < Rs" for radii out of order
-            self.connectivity()
-            self.integrator()
-        except ValueError as exc:
-            raise ValueError(
-                f"{exc} (R's = rs_inner_m, Rs = rs_m, Ro = ro_m, R'o = ro_outer_m, "
-                "Rc = rc_m, R'c = rc_outer_m)"
-            ) from None
-        return self
-
-    def connectivity(self) -> ConnectivityParams:
-        return ConnectivityParams(
-            rs_inner_m=self.rs_inner_m,
-            rs_m=self.rs_m,
-            ro_m=self.ro_m,
-            ro_outer_m=self.ro_outer_m,
-            rc_m=self.rc_m,
-            rc_outer_m=self.rc_outer_m,
-            lambda2_min=self.lambda2_min,
-            lambda2_null=self.lambda2_null,
-            potential_gain=self.potential_gain_n,
-        )
-
-    def integrator(self) -> IntegratorParams:
-        width = self.connectivity().transition_width_m
-        return IntegratorParams(
-            mass_kg=self.mass_kg,
-            damping_ns_per_m=self.damping_ns_per_m,
-            max_step_m=self.max_step_fraction * width,
-            keep_fraction=self.keep_fraction,
-        )
-
-    def estimator_params(self) -> EstimatorParams:
-        return self.estimator.gains()
-
-
-def external_force(
-    spec: ExternalForce, q: np.ndarray, rng: np.random.Generator, held: np.ndarray | None
-) -> np.ndarray:
-    """``f_i`` per robot, ``(n, dim)``, never longer than ``spec.magnitude_n``."""
-    n, dim = q.shape
-    if spec.kind == "none":
-        return np.zeros((n, dim))
-    if spec.kind == "constant":
-        f = np.broadcast_to(np.asarray(spec.forces or [[0.0] * dim], dtype=float), (n, dim))
-    elif spec.kind == "goal":
-        f = np.zeros((n, dim))
-        for robot, goal in zip(spec.robots, spec.goals, strict=True):
-            f[robot] = spec.gain_n_per_m * (np.asarray(goal, dtype=float) - q[robot])
-    else:
-        if held is not None:
-            return held
-        direction = rng.normal(size=(n, dim))
-        if spec.planar and dim == 3:
-            direction[:, 2] = 0.0
-        direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-12)
-        f = direction * rng.uniform(0.0, spec.magnitude_n, size=(n, 1))
-    norm = np.linalg.norm(f, axis=1, keepdims=True)
-    return f * np.minimum(1.0, spec.magnitude_n / np.maximum(norm, 1e-300))
-
-
-def _check_external(params: ConnectivityStrategyParams, initial: TeamState, src: str) -> None:
-    """Robot indices and vector sizes of the external force and failures fit the team."""
-    n, dim = initial.n, initial.dim
-    ext, field = params.external, f"{src}: strategy.params.external"
-    bad = [r for r in ext.robots if not 0 <= r < n]
-    if bad:
-        raise ScenarioError(f"{field}.robots: {bad[0]} is not a robot index in 0..{n - 1}")
-    if ext.kind == "goal" and len(ext.goals) != len(ext.robots):
-        raise ScenarioError(
-            f"{field}.goals: {len(ext.goals)} goals for {len(ext.robots)} robots; give one "
-            "goal per robot"
-        )
-    if any(len(g) != dim for g in ext.goals):
-        raise ScenarioError(f"{field}.goals: each goal needs {dim} coordinates")
-    if ext.forces is not None and (
-        len(ext.forces) not in (1, n) or any(len(f) != dim for f in ext.forces)
-    ):
-        raise ScenarioError(
-            f"{field}.forces: give one force of {dim} numbers for all robots or one per robot ({n})"
-        )
-    bad = [r for r in params.estimator.failures if not 0 <= r < n]
-    if bad:
-        raise ScenarioError(
-            f"{src}: strategy.params.estimator.failures: {bad[0]} is not a robot index in "
-            f"0..{n - 1}"
-        )
 
 
 def _unsafe_start(lam: float, conn: ConnectivityParams) -> str:
@@ -258,7 +81,7 @@ class ConnectivityStrategy(Strategy):
         initial_state: TeamState,
         rng: np.random.Generator,
     ) -> ConnectivityStrategy:
-        _check_external(params, initial_state, scenario.source)
+        check_external(params.external, params.estimator.failures, initial_state, scenario.source)
         cls.check_start(params, scenario, world, initial_state)
         return cls(params)
 
@@ -289,8 +112,11 @@ class ConnectivityStrategy(Strategy):
         self._warm = WarmState()  # the large-team eigensolver's factorization, this run only
         self._held: np.ndarray | None = None
         self._held_until = -1.0
+        self._f_ext: np.ndarray | None = None
         self._current = None
-        self._stats = {"substeps": 0, "rejections": 0, "stalls": 0}
+        self._memory = StepMemory()
+        self._run = IntegrationStats()
+        self._period = IntegrationStats()
         self._min = {"lambda2": np.inf, "distance": np.inf, "clearance": np.inf}
         self._est_err: list[tuple[float, float]] = []
         self.estimator: FiedlerEstimator | None = None
@@ -307,10 +133,12 @@ class ConnectivityStrategy(Strategy):
             self.estimator.update(graph, e.warmup_rounds)
         self._observe(state.positions, graph, lam, nu)
 
-    # ----------------------------------------------------------------- evaluation
+    # ------------------------------------------- the integrator's System protocol
 
-    def _evaluate(self, q: np.ndarray) -> tuple[float, Any]:
-        exact = self.params.eigensolver == "exact" or self.params.safeguard
+    def evaluate(self, q: np.ndarray) -> tuple[float, Any]:
+        """The exact weighted lambda2 of ``q`` (``inf`` when nothing needs it) and the cache
+        the forces use: ``(graph, lambda2, Fiedler vector)``."""
+        exact = self.params.eigensolver == "exact" or self.params.guard != "off"
         method = self.params.fiedler_method
         # with the guess, the kernels solve the eigenpair (and the exact force) in the
         # weights' call: the same bits as the calls below
@@ -323,18 +151,42 @@ class ConnectivityStrategy(Strategy):
             lam, nu = np.inf, None
         return lam, (graph, lam, nu)
 
-    def _force(self, cache: Any) -> np.ndarray:
+    def connectivity_force(self, cache: Any) -> np.ndarray:
+        """``f_lambda`` (eq. (17)) at the cached configuration; the estimator's current
+        estimates when it runs (a failed robot exerts no force)."""
         graph, lam, nu = cache
         if self.estimator is None:
-            self._nu = nu
             return exact_force(graph, lam, nu, self.conn)
         est = self.estimator
-        est.update(graph, self.params.estimator.rounds_per_substep)
+        f = connectivity_force(graph, est.lambda2, messages(graph, est.vector), self.conn)
+        f[~est.comm.alive()] = 0.0
+        return f
+
+    def forces(self, q: np.ndarray, v: np.ndarray, cache: Any) -> tuple:
+        """``(f_lambda + f_i, f_lambda, displacement step)`` at ``(q, v)``."""
+        f_lambda = self.connectivity_force(cache)
+        total = f_lambda + self._f_ext
+        return total, f_lambda, displacement_step(v, total, self.integ.mass_kg,
+                                                  self.integ.max_step_m)  # fmt: skip
+
+    def accept(self, q: np.ndarray, v: np.ndarray, cache: Any) -> bool:
+        """A sub-step ended at ``q``: keep its Fiedler vector (the next solve's guess) and
+        advance the estimator's rounds (then the force changes: True)."""
+        graph, _, nu = cache
         if nu is not None:
             self._nu = nu
-        f = connectivity_force(graph, est.lambda2, messages(graph, est.vector), self.conn)
-        f[~est.comm.alive()] = 0.0  # a failed robot exerts no force
-        return f
+        if self.estimator is None:
+            return False
+        self.estimator.update(graph, self.params.estimator.rounds_per_substep)
+        return True
+
+    def neighbours(self, cache: Any) -> np.ndarray:
+        return cache[0].pairs
+
+    def potential(self, lambda2: float) -> float:
+        return potential(lambda2, self.conn)[0]
+
+    # ----------------------------------------------------------------- one period
 
     def step(self, ctx: StepContext) -> TeamState:
         self._step = ctx.step
@@ -348,20 +200,26 @@ class ConnectivityStrategy(Strategy):
             self._held = f_ext
         if self.estimator is not None:
             f_ext = f_ext * self.estimator.comm.alive()[:, None]
-        q, v, ev, stats = integrate(
-            q, v, ctx.dt_s, self._evaluate, self._force, f_ext, self.integ,
-            self.conn.lambda2_min, self._current, box=self.world.bounds_m,
-            box_margin_m=self.conn.ro_m,
-        )  # fmt: skip
-        self._current = ev
-        self._stats["substeps"] += stats.substeps
-        self._stats["rejections"] += stats.rejections
-        self._stats["stalls"] += int(stats.stalled)
-        if stats.stalled:
-            self.emit("stall", substeps=stats.substeps)
+        self._f_ext = f_ext
+        q, v, ev, stats = self.integrate(q, v, ctx.dt_s, self)
         graph, lam, nu = ev[1]
         self._observe(q, graph, lam, nu)
         return TeamState(q, v)
+
+    def integrate(
+        self, q: np.ndarray, v: np.ndarray, dt_s: float, system: Any
+    ) -> tuple[np.ndarray, np.ndarray, tuple[float, Any], IntegrationStats]:
+        """One control period of eq. (1) for ``system``; its statistics are kept."""
+        q, v, ev, stats = integrate(
+            q, v, dt_s, system, self.integ, self.conn.lambda2_min, self._current,
+            box=self.world.bounds_m, box_margin_m=self.conn.ro_m, memory=self._memory,
+        )  # fmt: skip
+        self._current = ev
+        self._period = stats
+        self._run.add(stats)
+        if stats.stalled:
+            self.emit("stall", substeps=stats.substeps)
+        return q, v, ev, stats
 
     # ----------------------------------------------------------------- metrics
 
@@ -387,14 +245,50 @@ class ConnectivityStrategy(Strategy):
         if self.estimator is not None and nu is not None:
             self._est_err.append(estimate_errors(self.estimator, lam, nu))
 
+    def step_values(self) -> dict[str, Any]:
+        """Per control period: the largest speed and acceleration, and running totals of
+        what the integrator and the guard did (totals survive ``record_every``)."""
+        p, r = self._period, self._run
+        return {
+            "max_speed_mps": p.max_speed_mps,
+            "max_accel_mps2": p.max_accel_mps2,
+            "substeps": p.substeps,
+            "rejected_substeps_total": r.rejections,
+            "guard_interventions_total": r.guard_interventions,
+            "safe_set_exits_total": r.safe_set_exits,
+            "energy_added_j_total": r.energy_added_j,
+        }
+
+    def controller_success(self) -> bool | None:
+        """The invariants held by the controller alone: no guard intervention, no step
+        outside the safe set, every sub-step within the step rule (``None`` with the guard
+        off: not measured)."""
+        r = self._run
+        if self.params.guard == "off":
+            return None
+        return r.guard_interventions == 0 and r.safe_set_exits == 0 and r.tolerance_misses == 0
+
     def metrics(self) -> dict[str, Any]:
+        r = self._run
         out: dict[str, Any] = {
             "min_lambda2_weighted": self._min["lambda2"],
             "min_robot_distance_m": self._min["distance"],
             "min_obstacle_clearance_m": self._min["clearance"],
-            "substeps": self._stats["substeps"],
-            "rejected_substeps": self._stats["rejections"],
-            "stalls": self._stats["stalls"],
+            "guard": self.params.guard,
+            "controller_success": self.controller_success(),
+            "guard_interventions": r.guard_interventions,
+            "safe_set_exits": r.safe_set_exits,
+            "stalls": r.stalls,
+            "substeps": r.substeps,
+            "rejected_substeps": r.rejections,
+            "tolerance_misses": r.tolerance_misses,
+            "min_substep_s": r.min_step_s,
+            "max_speed_mps": r.max_speed_mps,
+            "speed_bound_mps": self.integ.robot.max_speed_mps,
+            "max_accel_mps2": r.max_accel_mps2,
+            "energy_added_j": r.energy_added_j,
+            "speed_limit_work_j": r.speed_limit_work_j,
+            "box_contacts": r.box_contacts,
             "eigensolver": self.params.eigensolver,
         }
         if self._est_err:

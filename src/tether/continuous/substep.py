@@ -1,9 +1,9 @@
 """The fused force of a ``multi_target`` sub-step: one compiled call instead of a chain.
 
-:func:`fused_total_force` makes the ``total_force`` callable of
-:func:`tether.continuous.dynamics.integrate` for one control period: it computes
-``f_lambda`` (eq. (17)) as :meth:`ConnectivityStrategy._force
-<tether.continuous.strategy.ConnectivityStrategy._force>` does, the traveling force of
+:func:`fused_total_force` makes the ``forces`` of
+:class:`tether.continuous.dynamics.System` for one control period: it computes
+``f_lambda`` (eq. (17)) as :meth:`ConnectivityStrategy.connectivity_force
+<tether.continuous.strategy.ConnectivityStrategy.connectivity_force>` does, the traveling force of
 Algorithm 2 as :func:`tether.continuous.multi_target.traveling_forces` does, their sum
 and the displacement rule's step, in one call of
 :func:`~tether.continuous.force_kernels.total_force_kernel` (the same kernels in the
@@ -18,11 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from tether.continuous.dynamics import TotalForce
 from tether.continuous.strategy import ConnectivityStrategy
 
 #: adjust(q, v, f_lambda, f_i) -> f_i: a change of the external force after the kernel
 Adjust = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+#: forces(q, v, cache) -> (f_lambda + f_i, f_lambda, displacement step)
+Forces = Callable[[np.ndarray, np.ndarray, Any], tuple[np.ndarray, np.ndarray, float]]
 
 
 def fused_total_force(
@@ -30,15 +31,14 @@ def fused_total_force(
     travel: tuple,
     gains: tuple[float, ...],
     adjust: Adjust | None = None,
-) -> TotalForce:
-    """``total_force(q, v, cache)`` for one control period.
+) -> Forces:
+    """``forces(q, v, cache)`` for one control period.
 
     Parameters
     ----------
     strategy
         The strategy integrating the period (its Table 2 parameters, the integrator's
-        mass and displacement bound; its last Fiedler vector is updated as its
-        ``_force`` would, so the next evaluation orients its vector the same way).
+        mass and displacement bound).
     travel, gains
         The traveling kernel's arguments a period fixes
         (:func:`tether.continuous.multi_target.travel_args`) and its gains
@@ -50,16 +50,16 @@ def fused_total_force(
         reference makes them (:func:`~tether.continuous.force_kernels.displacement_kernel`).
         Without it the fused call would leave the change out.
     """
-    from tether.continuous.force_kernels import displacement_kernel, total_force_kernel
+    from tether.continuous.dynamics_kernels import displacement_kernel
+    from tether.continuous.force_kernels import total_force_kernel
 
     conn, integ = strategy.conn, strategy.integ
     potential = (float(conn.lambda2_min), float(conn.lambda2_null), float(conn.potential_gain))
     gains = tuple(float(g) for g in gains)
     mass, delta = float(integ.mass_kg), float(integ.max_step_m)
 
-    def total_force(q: np.ndarray, v: np.ndarray, cache: Any) -> tuple[np.ndarray, float]:
+    def forces(q: np.ndarray, v: np.ndarray, cache: Any) -> tuple[np.ndarray, np.ndarray, float]:
         graph, lam, nu = cache
-        strategy._nu = nu
         arrays = (graph.pairs, graph.pair_factor, graph.collision, graph.dP_di, graph.dP_dj,
                   graph.coll_pairs, graph.coll_unit, graph.coll_logd)  # fmt: skip
         total, h, f_lambda, f_ext = total_force_kernel(
@@ -70,6 +70,6 @@ def fused_total_force(
         if adjust is not None:
             total = f_lambda + adjust(q, v, f_lambda, f_ext)
             h = displacement_kernel(np.ascontiguousarray(v), total, mass, delta)
-        return total, float(h)
+        return total, f_lambda, float(h)
 
-    return total_force
+    return forces

@@ -137,7 +137,7 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
 @njit(cache=True)
 def traveling_kernel(  # noqa: ANN201, PLR0913
     q, v, f_lambda, trav, secondary, lambda_hat, held, targets, path, v_cruise, tie, order,
-    kp, kv, mass, damping, max_force, sigma, rz, kz,
+    kp, kv, mass, damping, max_force, sigma, rz, kz, anchor_max,
 ):  # noqa: ANN001  # fmt: skip
     """``f_i`` of Algorithm 2 as :func:`tether.continuous.multi_target.traveling_forces`.
 
@@ -145,7 +145,8 @@ def traveling_kernel(  # noqa: ANN201, PLR0913
     :meth:`~tether.continuous.tracking.PathSet.kernel_args`), ``secondary`` which of
     them are secondaries; ``held``: the anchored robots and ``targets`` their targets.
     Eq. (3) saturated, ``rho(Theta(f_lambda, f_travel), Lambda_hat, sigma)`` for the
-    secondaries and ``f_anchor`` (eq. (7)), each in the numpy version's arithmetic.
+    secondaries and ``f_anchor`` (eq. (7), saturated at ``anchor_max``), each in the numpy
+    version's arithmetic.
     """
     n, dim = q.shape
     f = np.zeros((n, dim))
@@ -195,6 +196,8 @@ def traveling_kernel(  # noqa: ANN201, PLR0913
             sq += (q[i, c] - targets[k, c]) ** 2
         dist = math.sqrt(sq)
         mag = kz * math.tan(min(dist, rz) * np.pi / (2 * rz)) if dist < rz else np.nan
+        if np.isfinite(anchor_max):  # saturated (anchor_force)
+            mag = min(mag, anchor_max) if dist < rz else anchor_max
         den = max(dist, 1e-300)
         for c in range(dim):
             f[i, c] = -mag * ((q[i, c] - targets[k, c]) / den)

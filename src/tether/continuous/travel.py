@@ -59,17 +59,25 @@ def anchor_potential(distance_m: np.ndarray, rz_m: float, kz: float) -> np.ndarr
     return np.where(d >= rz_m, np.inf, v)
 
 
-def anchor_force(q: np.ndarray, z: np.ndarray, rz_m: float, kz: float) -> np.ndarray:
-    """``f_anchor = -k_z tan(l pi / (2 Rz)) (q - z) / l`` (eqs. (5), (7)), ``l = |q - z| < Rz``.
+def anchor_force(
+    q: np.ndarray, z: np.ndarray, rz_m: float, kz: float, max_force_n: float = np.inf
+) -> np.ndarray:
+    """``f_anchor = -k_z tan(l pi / (2 Rz)) (q - z) / l`` (eqs. (5), (7)), ``l = |q - z|``,
+    its norm saturated at ``max_force_n``.
 
-    The gradient of :func:`anchor_potential`: 0 on the target, unbounded at the
-    sphere of radius ``Rz`` (which the integrator's guard never lets an anchor
-    cross). Rows with ``l >= Rz`` get ``nan`` (the force is undefined there).
+    The gradient of :func:`anchor_potential` while that is below the bound: 0 on the
+    target, unbounded at the sphere of radius ``Rz`` as printed. Fact 1 of the paper needs
+    every ``f_i`` bounded, so the force is saturated like the traveling force; from ``Rz``
+    on it is the bound itself, pointing at the target (the ball is then a soft constraint;
+    a run counts the anchors that leave it). With ``max_force_n = inf`` (the paper's law)
+    rows with ``l >= Rz`` get ``nan`` (the force is undefined there).
     """
     diff = q - z
     dist = np.linalg.norm(diff, axis=1)
     inside = dist < rz_m
     mag = np.where(inside, kz * floats.tan(np.minimum(dist, rz_m) * np.pi / (2 * rz_m)), np.nan)
+    if np.isfinite(max_force_n):
+        mag = np.where(inside, np.minimum(mag, max_force_n), max_force_n)
     unit = diff / np.maximum(dist, 1e-300)[:, None]
     return -mag[:, None] * unit
 
