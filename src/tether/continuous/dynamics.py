@@ -166,6 +166,7 @@ class StepMemory:
 
     h_s: float = float("inf")
     next_s: float = float("inf")
+    jump_n: float = 0.0  # recent force jumps, halved at every sub-step
 
 
 def displacement_step(v: np.ndarray, force: np.ndarray, mass: float, delta_m: float) -> float:
@@ -326,8 +327,8 @@ def integrate(
             f1, f_c1, h_move1 = system.forces(q1, v1, ev1[1])
             terms = substep_terms(q, v, q1, v1, f, f1, f_c, system.neighbours(ev1[1]), h_try,
                                   robot.mass_kg)  # fmt: skip
-            omega2 = terms[0] if np.all(np.isfinite(f1)) else np.inf
-            jump = terms[1]
+            finite = bool(np.all(np.isfinite(f1)))  # an undefined force is never accepted
+            omega2, jump = (terms[0], terms[1]) if finite else (np.inf, np.inf)
             # the longest steps that would meet each test (the error's with a margin)
             h_stiff = params.stiffness_target / np.sqrt(omega2) if omega2 > 0 else np.inf
             h_err = 0.9 * np.sqrt(2.0 * robot.mass_kg * params.tolerance_m / jump) \
@@ -362,7 +363,13 @@ def integrate(
         stats.min_step_s = min(stats.min_step_s, h_try)
         if h_try < dt_s - t:  # a step the rules chose, not the rest of the period
             memory.h_s = h_try
-        memory.next_s = max(h_stiff, h_err)
+        # a force that jumps once often jumps back (a kink of the potential: a switch of
+        # the closest obstacle point, of the eigenvector of a repeated lambda2): the next
+        # step is sized for the largest recent jump, not for this step's alone
+        memory.jump_n = max(jump, 0.5 * memory.jump_n)
+        h_recent = 0.9 * np.sqrt(2.0 * robot.mass_kg * params.tolerance_m / memory.jump_n) \
+            if memory.jump_n > 0 else np.inf  # fmt: skip
+        memory.next_s = max(h_stiff, h_recent)
         if system.accept(q1, v1, ev1[1]):
             f1, f_c1, h_move1 = system.forces(q1, v1, ev1[1])
         q, v, ev, f, f_c, h_move = q1, v1, ev1, f1, f_c1, h_move1

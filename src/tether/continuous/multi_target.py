@@ -251,7 +251,11 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._max_primes = 0
         self._elections = 0
         self._filter_dev = 0.0
-        self._prime_eff = 1.0
+        self._prime_eff = float("nan")
+        self._anyone = np.ones(n, dtype=bool)
+        self._vacant_steps = 0
+        self._vacancy_run = 0
+        self._longest_vacancy = 0
         self._held: tuple[np.ndarray, np.ndarray] | None = None
         self._last_links: np.ndarray | None = None
         self._external = self._fused = None
@@ -295,6 +299,20 @@ class MultiTargetStrategy(ConnectivityStrategy):
         return links
 
     def _communicate(self, q: np.ndarray, v: np.ndarray, t_s: float, dt_s: float) -> None:
+        """Algorithm 1, then this period's message rounds: election, eq. (13), help.
+
+        The winner of an election always takes the prime role, even if it reached its
+        target (or finished anchoring) while the result travelled to it: it then holds the
+        role at its target and at once hosts the next election (as a prime that reaches
+        its target does, line 14 of Algorithm 1). So no prime exists only while a result
+        floods from host to winner, at most ``N - 1`` rounds (Sec. 3.3); a winner that
+        declined would leave the team without a prime for a whole new election.
+
+        ``Lambda_p`` (eq. (12)) measures how a traveling prime tracks its path. While no
+        prime travels (no prime, or one holding at its target during its election) it is
+        not defined, and nobody pins the consensus of eq. (13): the estimates keep
+        averaging among neighbours what they last knew.
+        """
         p, pl = self.params, self.planner
         wants = pl.update(q, t_s)
         robots, paths = pl.path_set()
@@ -306,9 +324,9 @@ class MultiTargetStrategy(ConnectivityStrategy):
             crit = pl.distance_to_target(q)
         links = self._links()
         rounds = p.messages.rounds_per_step
+        anyone = self._anyone  # a winner always takes the role (see _communicate's docstring)
         for _ in range(rounds):
-            out = self.election.round(links, pl.role == SECONDARY, crit, pl.role == SECONDARY,
-                                      wants)  # fmt: skip
+            out = self.election.round(links, pl.role == SECONDARY, crit, anyone, wants)
             for epoch, host in out.opened:
                 self.emit("election_open", host, t_s=t_s, epoch=epoch)
             for epoch, host, winner in out.decided:
@@ -321,7 +339,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
             for w in out.declined:
                 self.emit("election_declined", w, t_s=t_s)
         prime = int(np.flatnonzero(pl.role == PRIME)[0]) if (pl.role == PRIME).any() else -1
-        self._prime_eff = 1.0  # a prime at its target (no path) tracks perfectly
+        self._prime_eff = float("nan")  # no prime travels: Lambda_p is not defined
         where = np.flatnonzero(robots == prime)
         if len(where):  # eqs. (11)-(12)
             k = int(where[0])
@@ -329,8 +347,9 @@ class MultiTargetStrategy(ConnectivityStrategy):
                 + p.alpha_lambda * states.distance_m[k]  # fmt: skip
             band = (p.xc_frac * p.v_cruise_mps, p.xm_frac * p.v_cruise_mps)
             self._prime_eff = float(efficiency(np.array([err]), *band)[0])
+        pin = prime if len(where) else -1  # only a traveling prime feeds eq. (13)
         for _ in range(rounds):
-            self.consensus.round(links, dt_s / rounds, prime, self._prime_eff)
+            self.consensus.round(links, dt_s / rounds, pin, self._prime_eff)
         self._recruit(q, links, prime, t_s, dt_s)
 
     def _recruit(
@@ -417,6 +436,13 @@ class MultiTargetStrategy(ConnectivityStrategy):
             self._lambda_sum += lam
             self._lambda_count += 1
         self._max_primes = max(self._max_primes, int((pl.role == PRIME).sum()))
+        vacant = bool(not (pl.role == PRIME).any() and (pl.role == SECONDARY).any())
+        self._vacant_steps += vacant
+        self._vacancy_run = self._vacancy_run + 1 if vacant else 0
+        self._longest_vacancy = max(self._longest_vacancy, self._vacancy_run)
+        held, targets = self._anchors()
+        if len(held) and _anchor_leaves(q_new, held, targets, self.params.rz_m):
+            self._anchor_outside_steps += 1
         if self.params.reference_filter:
             if self.filter is None:
                 self.filter = ReferenceFilter(q, dt)
@@ -440,6 +466,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         primes = np.flatnonzero(role == PRIME)
         count = np.bincount(role, minlength=len(ROLE_NAMES))
         return {
+            **super().step_values(),
             "lambda2_weighted": float(self._current[0]) if self._current else float("nan"),
             "prime": int(primes[0]) if len(primes) else -1,
             "n_travelers": int(count[PRIME] + count[SECONDARY]),
@@ -467,6 +494,9 @@ class MultiTargetStrategy(ConnectivityStrategy):
             "mean_lambda2_weighted": self._lambda_sum / max(self._lambda_count, 1),
             "elections": self._elections,
             "max_simultaneous_primes": self._max_primes,
+            "prime_vacant_steps": self._vacant_steps,
+            "longest_prime_vacancy_steps": self._longest_vacancy,
+            "anchor_outside_steps": self._anchor_outside_steps,
             "help_requests": self._help_requests,
             "helper_robot_s": self._helper_s,
         }

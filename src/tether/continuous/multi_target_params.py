@@ -55,6 +55,7 @@ class StartConfig(_Strict):
 PRESET_DEFAULTS: dict[str, dict[str, Any]] = {
     "outdoor": {"help_lambda_factor": 0.1},
     "office": {"replan_stalled_s": 20.0},
+    "experiment": {"k_lambda_per_s": 1.0},  # Sec. 4.2: "We chose k_Lambda = 1"
 }
 
 

@@ -315,5 +315,6 @@ class RolePlanner:
             "targets_total": self.book.total,
             "targets_reached": self.reached,
             "targets_dropped": self.dropped,
+            "targets_pending": self.book.pending() + int(self._has_target.sum()),
             "replans": self.replans,
         }
