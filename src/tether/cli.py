@@ -34,7 +34,14 @@ SetOpt = Annotated[
     list[str] | None,
     typer.Option("--set", "-s", help="Override a scenario key, e.g. strategy.params.d0_m=5"),
 ]
-
+PluginOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--plugin",
+        "-p",
+        help="Import your own plug-in first: a module name or a .py file (repeatable).",
+    ),
+]
 
 QuickOpt = Annotated[
     bool,
@@ -52,6 +59,13 @@ def _load(scenario: str, overrides: list[str] | None, quick: bool = False):
     return load_scenario_at(scenario, quick=quick, overrides=overrides)
 
 
+def _load_plugins(plugins: list[str] | None) -> None:
+    """Import the ``--plugin`` modules and files, before any scenario is read."""
+    from tether.plugins import load_plugins
+
+    load_plugins(plugins)
+
+
 @app.command()
 def run(
     scenario: ScenarioArg = DEFAULT_SCENARIO,
@@ -65,11 +79,13 @@ def run(
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
     animate_: Annotated[bool, typer.Option("--animate", help="Then `tether animate` it.")] = False,
     view_: Annotated[bool, typer.Option("--view", help="Then `tether view` it.")] = False,
+    plugin: PluginOpt = None,
 ) -> None:
     """Run one scenario and write its run folder (scenario, Parquet records, summary, figures).
 
     Example: tether run scenarios/silent_paper.yaml --set strategy.params.d0_m=5
     """
+    _load_plugins(plugin)
     from tether.runner import run as run_scenario
 
     sc = _load(scenario, set_)
@@ -134,6 +150,7 @@ def sweep(
     ] = None,
     set_: SetOpt = None,
     quick: QuickOpt = False,
+    plugin: PluginOpt = None,
 ) -> None:
     """Run the scenario's `sweep:` combinations x seeds (resumable) into one table of trials.
 
@@ -142,6 +159,7 @@ def sweep(
 
     Example: tether sweep scenarios/silent_paper.yaml --out runs/fig5 --seeds 20
     """
+    _load_plugins(plugin)
     from tether.experiments.progress import progress_for
     from tether.experiments.sweep import run_sweep
     from tether.quicksize import QUICK_SUFFIX
@@ -184,7 +202,9 @@ def report(
 
 
 @app.command()
-def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False) -> None:
+def validate(
+    scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False, plugin: PluginOpt = None
+) -> None:
     """Check a scenario (schema, strategy parameters, map, initial team, memory) without running.
 
     Runs exactly the checks `tether run` runs before simulating (tether.runner.build),
@@ -192,6 +212,7 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
     scenario that validates is one that runs. The sweep's quick size, if any, is checked
     too (its keys and values); --quick checks the quick size as fully as the full one.
     """
+    _load_plugins(plugin)
     from tether.experiments.plan import check_combinations
     from tether.runfolder import check_writable
     from tether.runner import build, check_sweep, strategy_class
@@ -213,10 +234,11 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
 
 
 @app.command("list")
-def list_() -> None:
-    """List built-in scenarios, strategies and scenes."""
+def list_(plugin: PluginOpt = None) -> None:
+    """List built-in scenarios, strategies and scenes (with installed and --plugin ones)."""
+    _load_plugins(plugin)
     from tether.config import builtin_scenarios, paper_campaigns
-    from tether.plugins import load_builtins
+    from tether.plugins import IGNORED, load_builtins
 
     names = load_builtins()
     out.print("scenarios:   " + ", ".join(builtin_scenarios()), markup=False)
@@ -225,6 +247,8 @@ def list_() -> None:
     out.print("strategies:  " + ", ".join(names["strategies"]), markup=False)
     out.print("scenes:      " + ", ".join(names["scenes"]), markup=False)
     out.print("link models: " + ", ".join(names["link models"]), markup=False)
+    for line in IGNORED:
+        out.print(f"ignored plug-in: {line}", markup=False, highlight=False, soft_wrap=True)
 
 
 RunDirArg = Annotated[Path, typer.Argument(help="A run folder written by `tether run`.")]

@@ -144,7 +144,7 @@ def strategy_class(scenario: Scenario) -> type[Strategy]:
     if name not in STRATEGIES:
         raise ScenarioError(
             f"{scenario.source}: strategy.name: unknown strategy {name!r}; expected one of: "
-            f"{', '.join(STRATEGIES.names())}"
+            f"{', '.join(STRATEGIES.names())} (or your own module: --plugin FILE.py)"
         )
     return STRATEGIES.get(name)
 
