@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -15,7 +16,7 @@ import typer
 from rich.console import Console
 
 from tether.config import MAX_SEED
-from tether.errors import TetherError
+from tether.errors import TetherError, TetherWarning
 
 app = typer.Typer(
     add_completion=False,
@@ -330,6 +331,17 @@ def _usage_line(exc: Exception) -> str:
     return f"error: {message} (see `{command} --help`)"
 
 
+_python_showwarning = warnings.showwarning
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+    """A :class:`TetherWarning` as one ``warning: ...`` line; others as Python shows them."""
+    if issubclass(category, TetherWarning):
+        err.print(f"warning: {message}", highlight=False, markup=False, soft_wrap=True)
+    else:
+        _python_showwarning(message, category, filename, lineno, file, line)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point: run the app, turning user errors into one line on stderr.
 
@@ -337,6 +349,7 @@ def main(argv: list[str] | None = None) -> None:
     option, the field and the fix; usage errors too), 1 an internal error (one
     line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted.
     """
+    warnings.showwarning = _show_warning
     try:
         app(args=argv, prog_name="tether", standalone_mode=False)
     except TetherError as exc:

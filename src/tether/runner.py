@@ -30,19 +30,19 @@ from tether.config import (
     set_dotted,
     sweep_spec,
 )
-from tether.errors import MapError, OutputError, ScenarioError, TetherError
+from tether.errors import OutputError, ScenarioError, TetherError
 from tether.graph import is_connected
 from tether.limits import format_bytes, memory_budget_bytes
 from tether.plugins import load_builtins
 from tether.record import TrajectoryRecorder, summarize
 from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
+from tether.scenario_world import STAND_IN_KEY, build_world
 from tether.sensing import SensorModel, sensed_pairs
 from tether.sim import Strategy, TeamState, simulate
 from tether.sweepspec import canonical, value_key
 from tether.team import initial_positions
 from tether.viz.plots import link_range_m, links_over_time, team_snapshot
-from tether.world.scenes import make_scene
 from tether.world.world import World
 
 load_builtins()
@@ -64,67 +64,6 @@ class Built:
 class RunOutcome:
     path: Path
     summary: dict[str, Any]
-
-
-#: worlds of procedural scenes with a fixed layout seed (``world.params.seed``), per process
-_WORLDS: dict[str, World] = {}
-_WORLDS_KEPT = 4
-
-
-def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
-    """The scenario's world from the scene registry (``free``, ``map``, ``town``, ...).
-
-    A scene whose layout is fixed by ``world.params.seed`` (and read from no file)
-    is built once per process and shared by later runs with the same parameters:
-    a campaign's worker then builds the town, its distance field and its obstacle
-    index once, not per trial. Nothing in a run changes a world.
-    """
-    src, cfg = scenario.source, scenario.world
-    if cfg.scene not in SCENES:
-        raise ScenarioError(
-            f"{src}: world.scene: unknown scene {cfg.scene!r}; expected one of: "
-            f"{', '.join(SCENES.names())}"
-        )
-    params = dict(cfg.params)
-    if cfg.scene == "free":
-        params.setdefault("dim", cfg.dim)
-    field = "world.params"
-    for key in ("path", "file"):
-        if key in params:
-            field = f"world.params.{key}"
-            if not isinstance(params[key], str) or not params[key]:
-                raise ScenarioError(
-                    f"{src}: {field}: got {params[key]!r}; it must be a file path string "
-                    "(e.g. ../shared/maps/grass.png)"
-                )
-            resolved = scenario.resolve_path(params[key])
-            if not resolved.exists():
-                raise ScenarioError(
-                    f"{src}: {field}: {params[key]}: file not found beside the scenario "
-                    f"({scenario.base_dir}) or from the current directory; give a path "
-                    "relative to one of them or an absolute one"
-                )
-            params[key] = str(resolved)
-    # a procedural layout fixed by its own seed is the same world for every run: keep it
-    # (with its distance field and obstacle index) for the next runs of this process
-    key = None
-    if "seed" in params and field == "world.params":
-        key = repr((cfg.scene, sorted(params.items())))
-    world = _WORLDS.get(key) if key is not None else None
-    if world is None:
-        try:
-            world = make_scene(cfg.scene, rng, **params)
-        except (MapError, ScenarioError) as exc:
-            raise ScenarioError(f"{src}: {field}: {exc}") from None
-        if key is not None:
-            if len(_WORLDS) >= _WORLDS_KEPT:
-                _WORLDS.pop(next(iter(_WORLDS)))
-            _WORLDS[key] = world
-    if world.dim != cfg.dim:
-        raise ScenarioError(
-            f"{src}: world.dim: scene {cfg.scene!r} is {world.dim}-D; set dim: {world.dim}"
-        )
-    return world
 
 
 def make_sensor(scenario: Scenario) -> SensorModel:
@@ -266,6 +205,7 @@ def _check_scene_parameter(scenario: Scenario, key: str) -> None:
         return
     factory = SCENES.get(scenario.world.scene)
     accepted = [p for p in inspect.signature(factory).parameters if p != "rng"] + ["seed"]
+    accepted += [STAND_IN_KEY] if "path" in accepted else []
     if parts[2] not in accepted:
         raise ScenarioError(
             f": world.params.{parts[2]}: scene {scenario.world.scene!r} has no such parameter; "
