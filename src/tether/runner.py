@@ -37,7 +37,7 @@ from tether.plugins import load_builtins
 from tether.record import TrajectoryRecorder, summarize
 from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
-from tether.scenario_world import STAND_IN_KEY, build_world
+from tether.scenario_world import STAND_IN_KEY, build_world, keep_scene_files, scene_files
 from tether.sensing import SensorModel, sensed_pairs
 from tether.sim import Strategy, TeamState, simulate
 from tether.sweepspec import canonical, value_key
@@ -375,7 +375,9 @@ def run(
         folder.abort()
         raise
     try:
-        folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
+        data = scenario.model_dump(mode="json")
+        kept = keep_scene_files(folder.staging, data, scene_files(scenario)[1])
+        folder.write_yaml("scenario.yaml", data)
         folder.write_table("steps.parquet", recorder.step_columns())
         folder.write_table("robots.parquet", recorder.robot_columns())
         folder.write_table("links.parquet", recorder.link_columns())
@@ -384,6 +386,8 @@ def run(
             for name, fig in run_figures(built, recorder).items():
                 folder.save_figure(fig, name)
         summary = summarize(scenario, seed, result, wall)
+        if kept:  # the files the world read: their copies and hashes
+            summary["scene_files"] = kept
         folder.commit(summary)
     except OSError as exc:  # the disk filled up, the folder was removed, ...
         folder.abort()

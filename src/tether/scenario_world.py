@@ -8,30 +8,52 @@ the current folder (:meth:`tether.config.Scenario.resolve_path`). A scenario may
 scenarios on the recurrent paper's maps use it: the maps beside a checkout of the
 repository cannot be shipped, so a built-in name runs anywhere on a map of the same
 kind that tether makes and ships (``tether/scenarios/maps``).
+
+A run keeps the files its world read (:func:`keep_scene_files`): copied into the run
+folder's ``files/`` (a ROS map YAML with its image), the run's ``scenario.yaml``
+pointing at the copies, and ``summary.json`` recording each file's SHA-256, so
+``tether run RUN_DIR/scenario.yaml`` runs the same world from any folder.
 """
 
 from __future__ import annotations
 
+import hashlib
 import re
+import shutil
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
-from tether.config import Scenario
+from tether.config import Scenario, YamlLoader
 from tether.errors import MapError, ScenarioError, TetherWarning
 from tether.registry import SCENES
 from tether.world.scenes import make_scene
 from tether.world.world import World
 
-__all__ = ["FILE_KEYS", "STAND_IN_KEY", "SceneFile", "build_world", "scene_files"]
+__all__ = [
+    "FILE_KEYS",
+    "MAX_KEPT_BYTES",
+    "STAND_IN_KEY",
+    "SceneFile",
+    "build_world",
+    "keep_scene_files",
+    "scene_files",
+]
 
 #: ``world.params`` keys that name a file the scene reads
 FILE_KEYS = ("path", "file")
 #: ``world.params`` key of the file used when ``path`` is not found
 STAND_IN_KEY = "stand_in_path"
+
+#: a scene file larger than this is not copied into the run folder (its path and hash are
+#: recorded instead): a sweep of hundreds of trials would copy it hundreds of times
+MAX_KEPT_BYTES = 16 * 2**20
+#: the run folder's subfolder holding the scene files
+FILES_DIR = "files"
 
 #: worlds of procedural scenes with a fixed layout seed (``world.params.seed``), per process
 _WORLDS: dict[str, World] = {}
@@ -175,3 +197,101 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
             f"{src}: world.dim: scene {cfg.scene!r} is {world.dim}-D; set dim: {world.dim}"
         )
     return world
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(2**20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _map_image(path: Path) -> tuple[str, Path] | None:
+    """``(image as written, image path)`` of a ROS map YAML, ``None`` for other files."""
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        return None
+    try:
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=YamlLoader)  # noqa: S506
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return None
+    image = data.get("image") if isinstance(data, dict) else None
+    if not isinstance(image, str) or not image:
+        return None
+    found = Path(image).expanduser()
+    return image, found if found.is_absolute() else path.parent / found
+
+
+def keep_scene_files(
+    staging: Path, data: dict[str, Any], files: list[SceneFile]
+) -> list[dict[str, Any]]:
+    """Copy the scene's files into ``staging / "files"`` and point ``data`` at the copies.
+
+    Parameters
+    ----------
+    staging
+        The run folder being written (its staging folder).
+    data
+        The scenario as it will be written to ``scenario.yaml`` (changed in place:
+        ``world.params.<key>`` becomes ``files/<name>``, ``stand_in_path`` is dropped
+        since the file used is the one kept).
+    files
+        The files the world read (:func:`scene_files`).
+
+    Returns
+    -------
+    list of dict
+        One record per file for ``summary.json``: ``key``, ``given`` (the path the
+        scenario gave), ``stand_in`` (the stand-in used instead, or ``None``), ``used``
+        (the absolute path read), ``sha256``, ``bytes`` and ``copy`` (the path in the run
+        folder, or ``None`` for a file over :data:`MAX_KEPT_BYTES`, whose absolute path
+        is then kept in ``scenario.yaml``).
+    """
+    params = data.setdefault("world", {}).setdefault("params", {})
+    params.pop(STAND_IN_KEY, None)
+    records = []
+    taken: set[str] = set()
+    for item in files:
+        size = item.path.stat().st_size
+        stood_in = item.stand_in_for is not None
+        record: dict[str, Any] = {
+            "key": f"world.params.{item.key}",
+            "given": item.stand_in_for if stood_in else item.given,
+            "stand_in": item.given if stood_in else None,
+            "used": str(item.path.resolve()),
+            "sha256": _sha256(item.path),
+            "bytes": size,
+            "copy": None,
+        }
+        image = _map_image(item.path)
+        extra = image[1].stat().st_size if image and image[1].is_file() else 0
+        if size + extra <= MAX_KEPT_BYTES:
+            name = _free_name(item.path.name, taken)
+            target = staging / FILES_DIR / name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(item.path, target)
+            if image is not None and image[1].is_file():
+                image_name = _free_name(image[1].name, taken)
+                shutil.copyfile(image[1], target.parent / image_name)
+                if image_name != image[0]:  # the copy names the image beside it
+                    text = item.path.read_text(encoding="utf-8")
+                    map_data = yaml.load(text, Loader=YamlLoader)  # noqa: S506
+                    map_data["image"] = image_name
+                    target.write_text(yaml.safe_dump(map_data, sort_keys=False))
+            record["copy"] = f"{FILES_DIR}/{name}"
+            params[item.key] = record["copy"]
+        else:
+            params[item.key] = str(item.path.resolve())
+        records.append(record)
+    return records
+
+
+def _free_name(name: str, taken: set[str]) -> str:
+    """``name``, or ``<stem>-2<suffix>`` ... if another kept file has it."""
+    stem, suffix = Path(name).stem, Path(name).suffix
+    candidate, k = name, 1
+    while candidate in taken:
+        k += 1
+        candidate = f"{stem}-{k}{suffix}"
+    taken.add(candidate)
+    return candidate
