@@ -9,8 +9,8 @@ gives the same run.
 from __future__ import annotations
 
 import hashlib
-import shutil
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np

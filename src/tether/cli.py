@@ -190,15 +190,44 @@ def sweep(
 
 @app.command()
 def report(
-    sweep_dir: Annotated[Path, typer.Argument(help="A sweep folder written by `tether sweep`.")],
+    sweep_dirs: Annotated[
+        list[Path], typer.Argument(help="Sweep folder(s) written by `tether sweep`.")
+    ],
+    paper: Annotated[
+        str | None,
+        typer.Option(
+            "--paper",
+            help="recurrent: the recurrent paper's Figs. 4-6 and tables from the sweep "
+            "folders of its campaigns (paper/recurrent_*).",
+        ),
+    ] = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option("--out", "-o", help="With --paper: where to write (default: first folder)."),
+    ] = None,
 ) -> None:
     """Write a Markdown report of a sweep: figures with percentile bands and statistics.
 
     Writes SWEEP_DIR/report.md and SWEEP_DIR/figures/. Example: tether report runs/fig5
-    """
-    from tether.experiments.report import write_report
 
-    path = write_report(sweep_dir, command=f"tether report {sweep_dir}")
+    With --paper recurrent, several folders (the sweeps of paper/recurrent_fig4,
+    recurrent_fig5_6, recurrent_fig5_6_utility, recurrent_relay_binding) make the
+    paper's figures and tables: OUT/recurrent_paper.md, .json and OUT/figures/.
+    """
+    command = " ".join(["tether report", *map(str, sweep_dirs)])
+    if paper is not None:
+        from tether.recurrent.report import write_paper_report
+
+        command += f" --paper {paper}" + (f" --out {out_dir}" if out_dir else "")
+        path = write_paper_report(paper, sweep_dirs, out_dir, command=command)
+    else:
+        from tether.experiments.report import write_report
+
+        if len(sweep_dirs) != 1 or out_dir is not None:
+            raise TetherError(
+                "tether report: give one sweep folder (several, and --out, only with --paper)"
+            )
+        path = write_report(sweep_dirs[0], command=command)
     out.print(f"report: {path}", markup=False, highlight=False, soft_wrap=True)
 
 
