@@ -228,6 +228,7 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
     rng = np.random.default_rng(scenario.seed if seed is None else seed)
     cls = strategy_class(scenario)
     params = strategy_params(scenario, cls)
+    check_link_range(scenario, params)
     check_sweep(scenario, cls)
     world = build_world(scenario, rng)
     sensor = make_sensor(scenario)
@@ -239,6 +240,25 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
     strategy = cls.from_scenario(params, scenario, world, initial, rng)
     check_run_size(scenario, initial, strategy, sensor, pairs)
     return Built(scenario, world, sensor, initial, strategy, rng)
+
+
+def check_link_range(scenario: Scenario, params: Any) -> None:
+    """Refuse a sensing range below the range the strategy keeps links within (``rs_m``).
+
+    The recorded graph is the sensed one (``sensing.range_m``); a strategy with ``rs_m``
+    (the connectivity force's ``Rs``) keeps every link up to it. Below it, the force would
+    count on links the robots cannot sense, and the recorded graph would not be the one
+    the controller keeps connected.
+    """
+    rs = getattr(params, "rs_m", None)
+    if isinstance(rs, int | float) and scenario.sensing.range_m < rs:
+        preset = getattr(params, "preset", None)
+        where = f" (preset {preset})" if preset else ""
+        raise ScenarioError(
+            f"{scenario.source}: sensing.range_m: {scenario.sensing.range_m:g} m is below the "
+            f"strategy's link range Rs = {rs:g} m{where}: it would keep links the robots "
+            f"cannot sense; set sensing.range_m: {rs:g} or lower strategy.params.rs_m"
+        )
 
 
 def check_run_size(

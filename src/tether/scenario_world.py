@@ -18,6 +18,7 @@ pointing at the copies, and ``summary.json`` recording each file's SHA-256, so
 from __future__ import annotations
 
 import hashlib
+import inspect
 import re
 import shutil
 import warnings
@@ -144,7 +145,7 @@ def scene_files(scenario: Scenario) -> tuple[dict[str, Any], list[SceneFile]]:
     return params, files
 
 
-def _field_of(message: str, params: dict[str, Any], files: list[SceneFile]) -> str:
+def _field_of(message: str, names: list[str], files: list[SceneFile]) -> str:
     """``<field>: <problem>`` of a scene's error: the parameter it is about as its field.
 
     Scenes that read a file name it first (``<file>: bounds_m: ...``); an error about
@@ -153,7 +154,7 @@ def _field_of(message: str, params: dict[str, Any], files: list[SceneFile]) -> s
     """
     if not files:
         return f"world.params: {message}"
-    for name in params:
+    for name in names:
         found = re.search(rf"(^|: ){re.escape(name)}: ", message)
         if found and name not in FILE_KEYS:
             return f"world.params.{name}: {message[found.end() :]} (reading {files[0].given})"
@@ -175,7 +176,7 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
             f"{', '.join(SCENES.names())}"
         )
     params, files = scene_files(scenario)
-    if cfg.scene == "free":
+    if cfg.scene in ("free", "map"):  # scenes whose dimension the scenario chooses
         params.setdefault("dim", cfg.dim)
     # a procedural layout fixed by its own seed is the same world for every run: keep it
     # (with its distance field and obstacle index) for the next runs of this process
@@ -187,7 +188,8 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
         try:
             world = make_scene(cfg.scene, rng, **params)
         except (MapError, ScenarioError) as exc:
-            raise ScenarioError(f"{src}: {_field_of(str(exc), params, files)}") from None
+            names = [*inspect.signature(SCENES.get(cfg.scene)).parameters, *params]
+            raise ScenarioError(f"{src}: {_field_of(str(exc), names, files)}") from None
         if key is not None:
             if len(_WORLDS) >= _WORLDS_KEPT:
                 _WORLDS.pop(next(iter(_WORLDS)))
