@@ -4,9 +4,10 @@ A tiny package is written to a temporary folder and installed with pip into a fr
 virtual environment that sees this one's packages (tether and its dependencies), with
 no network: ``--no-index --no-build-isolation --no-deps`` and a build backend inside the
 package (``backend-path``), so the test needs neither setuptools nor wheel. The package
-declares three entry points: a strategy given as ``module:Class`` that its module does
+declares four entry points: a strategy given as ``module:Class`` that its module does
 not register (tether registers it), a scene its module registers with the decorator,
-and a strategy named ``silent`` that clashes with the built-in one (ignored, and said so).
+a strategy named ``silent`` that clashes with the built-in one (ignored, and said so),
+and one whose module is missing (listed; a scenario using it gets one line).
 """
 
 from __future__ import annotations
@@ -105,6 +106,7 @@ ENTRY_POINTS = """
 [tether.strategies]
 plugin_drift = tether_plugin_demo:Drift
 silent = tether_plugin_demo:Drift
+plugin_broken = tether_plugin_demo_missing:Broken
 
 [tether.scenes]
 plugin_corridor = tether_plugin_demo
@@ -209,3 +211,13 @@ def test_plugin_is_absent_without_the_package(tmp_path):
     done = _tether(Path(sys.executable), tmp_path, "validate", "drift.yaml")
     assert done.returncode == 2
     assert "strategy.name: unknown strategy 'plugin_drift'" in done.stderr
+
+
+def test_a_broken_installed_plugin_is_one_line_and_harms_nothing_else(plugin_venv, tmp_path):
+    (tmp_path / "broken.yaml").write_text(SCENARIO.replace("plugin_drift", "plugin_broken"))
+    done = _tether(plugin_venv, tmp_path, "validate", "broken.yaml")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert "strategy 'plugin_broken' (package tether_plugin_demo 0.1): its module " in done.stderr
+    assert "tether_plugin_demo_missing failed to import (ModuleNotFoundError" in done.stderr
+    done = _tether(plugin_venv, tmp_path, "validate", "silent_demo")
+    assert done.returncode == 0, done.stderr

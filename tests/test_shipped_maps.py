@@ -69,7 +69,8 @@ def test_every_file_beside_the_scenarios_is_package_data():
 def test_the_recurrent_builtins_name_a_shipped_stand_in():
     names = _stand_in_names()
     runs = {f"recurrent_{m}" for m in ("grass", "offices", "open", "utility")}
-    campaigns = {f"paper/recurrent_{f}" for f in ("fig4", "fig5_6", "fig5_6_utility")}
+    kinds = ("fig4", "fig5_6", "fig5_6_utility", "relay_binding")
+    campaigns = {f"paper/recurrent_{f}" for f in kinds}
     expect = runs | campaigns
     assert set(names) == expect
     for name in names:

@@ -29,7 +29,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
+
+from tether.world.scene_kit import fill_pockets
 
 __all__ = ["GENERATED_MAPS", "RESOLUTION_M", "SHAPE_PX", "cluttered", "office", "open_space"]
 
@@ -45,18 +46,9 @@ def _pixels() -> tuple[np.ndarray, np.ndarray]:
     return (cols + 0.5) * RESOLUTION_M, (SHAPE_PX[0] - rows - 0.5) * RESOLUTION_M
 
 
-def _connected(occupied: np.ndarray) -> np.ndarray:
-    """Obstacles plus every free pocket apart from the largest free region."""
-    labels, count = ndimage.label(~occupied)
-    if count <= 1:
-        return occupied
-    sizes = np.bincount(labels.ravel())
-    sizes[0] = 0
-    return occupied | (labels != int(np.argmax(sizes)))
-
-
 def _image(occupied: np.ndarray) -> np.ndarray:
-    return np.where(_connected(occupied), OBSTACLE, FREE).astype(np.uint8)
+    """The map image: obstacles black, and free pockets off the largest free region too."""
+    return np.where(fill_pockets(occupied), OBSTACLE, FREE).astype(np.uint8)
 
 
 def cluttered(seed: int = 11) -> np.ndarray:
