@@ -352,8 +352,9 @@ CASES: dict[str, Case] = {
     "PGM truncated": Case(
         "cut.pgm", _map_file("cut.pgm", lambda p: p.write_bytes(b"P5 100000 100000 255\n\x00"))
     ),
-    "map given in 3-D": Case(
-        "world.dim", _all(lambda d, t: d.update(world=wall_map(t)), _set("world.dim", 3))
+    "map in 3-D without its height": Case(
+        "world.params.height_m",
+        _all(lambda d, t: d.update(world=wall_map(t)), _set("world.dim", 3)),
     ),
     "ROS map: negative resolution": Case(
         "resolution", _ros_yaml("image: img.png\nresolution: -1\norigin: [0, 0, 0]\n")

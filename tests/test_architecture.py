@@ -38,7 +38,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         ("tether.sim", "tether.record", "tether.team", "tether.viz.plots", "tether.viz.style"),
     ),
     ("strategies", ("tether.silent", "tether.continuous", "tether.recurrent")),
-    ("running", ("tether.runner", "tether.plugins")),
+    ("running", ("tether.runner", "tether.plugins", "tether.scenario_world")),
     ("experiments", ("tether.experiments", "tether.recurrent.report")),
     ("interfaces", ("tether.cli", "tether.viz", "tether.export", "tether.viewer")),
 ]

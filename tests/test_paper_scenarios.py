@@ -4,8 +4,9 @@
   checks of ``tether validate``; at the quick size every combination builds;
 * ``continuous_fig9.yaml`` (one zipped sweep) gives, trial by trial, the scenarios of the
   three per-scene files the running campaign reads; ``silent_fig5.yaml`` is
-  ``silent_paper.yaml``; the trials of ``python -m tether.recurrent.report`` are the
-  recurrent files' combinations (it derives them from the files).
+  ``silent_paper.yaml``; a setting that two recurrent campaigns share (theta = 12 with
+  instantaneous planning, theta = 1 with the default relay binding) is one scenario in
+  both, so ``tether report --paper recurrent`` may take it from either.
 
 Cost: building the quick combinations of ``continuous_fig9.yaml`` builds the town and the
 office (3-D scenes), the slowest part (about 15 s on a loaded 2-core machine).
@@ -18,11 +19,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tether.config import load_scenario, scenario_from_dict
+from tether.config import load_scenario
 from tether.experiments.plan import check_combinations, seeds_of, trial_scenario
 from tether.quicksize import load_scenario_at
-from tether.recurrent.report import trial_scenario as report_trial_scenario
-from tether.recurrent.report_settings import run_dir, settings_table
 from tether.runner import check_sweep, strategy_class
 from tether.sweepspec import parse_sweep
 
@@ -37,6 +36,7 @@ EXPECTED = {
     "recurrent_fig4.yaml",
     "recurrent_fig5_6.yaml",
     "recurrent_fig5_6_utility.yaml",
+    "recurrent_relay_binding.yaml",
     "continuous_fig9.yaml",
 }
 #: what the trials compute (name and description only label them)
@@ -108,73 +108,30 @@ def test_silent_fig5_is_silent_paper():
     assert ours.seed == paper.seed
 
 
-def _report_scenarios(name: str, maps_dir: Path) -> dict[tuple[str, str], dict]:
-    """The report's scenario of every (map, label) taken from paper file ``name``."""
-    table = settings_table()
-    return {
-        (m, label): report_trial_scenario(maps_dir / f"{m}.png", setting, steps=900, n_robots=12)
-        for m in ("grass", "offices", "open")
-        for label, setting in table.items()
-        if setting.file == Path(name).stem
-    }
-
-
-@pytest.mark.parametrize(
-    "name", ["recurrent_fig4.yaml", "recurrent_fig5_6.yaml", "recurrent_fig5_6_utility.yaml"]
-)
-def test_the_report_trials_are_the_paper_combinations(name, monkeypatch, skip_without_shared_map):
-    """Each combination of the file is one report setting per map, value for value.
-
-    The report's own labels (no variant) are exactly the file's combinations; the
-    report only names them ``recurrent-report-<map>`` and gives the map's absolute path.
-    """
-    monkeypatch.chdir(ROOT)
+def _trials(name: str, **pick) -> list[dict]:
+    """The computed scenarios of the combinations of paper file ``name`` with ``pick``'s values."""
     scenario = load_scenario(PAPER / name)
-    skip_without_shared_map(scenario)
-    spec = parse_sweep(scenario.sweep)
-    assert seeds_of(scenario) == [0, 1, 2, 3, 4]  # the report's runs 0..4 (the BS position)
-    maps = [Path(p).stem for p in spec.axes["world.params.path"]]
-    assert maps == ["grass", "offices", "open"]
-    maps_dir = scenario.resolve_path(spec.axes["world.params.path"][0]).parent
-    table = settings_table()
-    report = _report_scenarios(name, maps_dir)
-    own = {k: v for k, v in report.items() if not table[k[1]].variant}
-    paper = []
-    for combo in spec.combinations():
-        data = trial_scenario(scenario, combo).model_dump(mode="json")
-        path = data["world"]["params"]["path"]
-        data["world"]["params"]["path"] = str(scenario.resolve_path(path).resolve())
-        paper.append(_computed(data))
-    ours = [_computed(scenario_from_dict(d, "report", ROOT).model_dump(mode="json"))
-            for d in own.values()]  # fmt: skip
-    assert len(ours) == len(paper) == spec.n_combinations
-    assert all(p in ours for p in paper) and all(o in paper for o in ours)
-    for (m, _), data in report.items():
-        assert data["name"] == f"recurrent-report-{m}" and data["seed"] == scenario.seed
+    combos = [c for c in parse_sweep(scenario.sweep).combinations()
+              if all(c.get(f"strategy.params.{k}") == v for k, v in pick.items())]  # fmt: skip
+    return [_computed(trial_scenario(scenario, c).model_dump(mode="json")) for c in combos]
 
 
-def test_variants_change_one_value_and_same_runs_are_same_scenarios(
-    monkeypatch, skip_without_shared_map
-):
-    """``theta1_frontiers`` and ``utility_none`` are theta1 and utility with one value changed;
-    labels share a run folder exactly when their scenarios are equal."""
-    monkeypatch.chdir(ROOT)
-    scenario = load_scenario(PAPER / "recurrent_fig5_6.yaml")
-    skip_without_shared_map(scenario)
-    maps_dir = scenario.resolve_path(scenario.world.params["path"]).parent
-    table = settings_table()
-    report = {}
-    for name in ("recurrent_fig4.yaml", "recurrent_fig5_6.yaml", "recurrent_fig5_6_utility.yaml"):
-        report.update({k[1]: v for k, v in _report_scenarios(name, maps_dir).items()
-                       if k[0] == "grass"})  # fmt: skip
-    assert set(report) == set(table)
-    for label, base in (("theta1_frontiers", "theta1"), ("utility_none", "utility")):
-        a, b = report[label]["strategy"]["params"], report[base]["strategy"]["params"]
-        assert {k for k in a if a[k] != b[k]} == {k.split(".")[-1] for k in table[label].variant}
-    for a in table:
-        for b in table:
-            same_folder = run_dir(Path("o"), "m", a, 0) == run_dir(Path("o"), "m", b, 0)
-            assert same_folder == (report[a] == report[b]), (a, b)
+def test_settings_shared_by_two_campaigns_are_one_scenario():
+    """The paper report may take a shared setting from either campaign: same trials."""
+    fig4 = _trials("recurrent_fig4.yaml", method="apx", count_planning_time=False)
+    assert len(fig4) == 3 and fig4 == _trials("recurrent_fig5_6.yaml", theta=12)
+    relay = _trials("recurrent_relay_binding.yaml", relay_binding="assigned")
+    assert len(relay) == 3 and relay == _trials("recurrent_fig5_6.yaml", theta=1)
+    frontiers = _trials("recurrent_relay_binding.yaml", relay_binding="frontiers")
+    for a, b in zip(relay, frontiers, strict=True):  # one value apart
+        a_params, b_params = a["strategy"]["params"], b["strategy"]["params"]
+        assert {k for k in a_params if a_params[k] != b_params[k]} == {"relay_binding"}
+    none = _trials("recurrent_fig5_6_utility.yaml", coordination="none")
+    greedy = _trials("recurrent_fig5_6_utility.yaml", coordination="greedy")
+    assert len(none) == len(greedy) == 3
+    for name in FILES:  # every recurrent file runs 5 BS positions (seeds 0-4) per setting
+        if name.startswith("recurrent"):
+            assert seeds_of(load_scenario(PAPER / name)) == [0, 1, 2, 3, 4]
 
 
 def test_package_data_ships_the_paper_files():

@@ -1,7 +1,7 @@
 """The recurrent-connectivity strategy in the simulator: every plan satisfies (I)-(IV).
 
 Tiny versions of the paper's runs (small maps, 3-4 robots, ~60 steps); the
-full experiment is ``tether.recurrent.report.make_report``.
+full experiment is ``tether report --paper recurrent`` over the paper campaigns' sweeps.
 """
 
 from __future__ import annotations
@@ -171,42 +171,7 @@ def test_real_map_scenarios_are_the_papers_setting(tmp_path: Path, name: str) ->
     assert s["map_cells"] == [800, 600] and s["steps"] == 12
     if name != "recurrent_utility":
         assert s["constraint_violations"] == 0
-    # same map cells and BS as run0 of tether.recurrent.report (seed 0)
+    # same map cells and BS as seed 0 of the paper campaigns
     occ = load_map(map_path, occupied_thresh=0.999, free_thresh=0.998).occupied
     base = random_base(occ, 3, np.random.default_rng(0))
     assert np.allclose(np.asarray(s["base_m"]) / 0.1, base)
-
-
-def test_report_runs_identical_settings_once(tmp_path: Path) -> None:
-    """``apx_t12_instant`` and ``theta12`` are one setting: one run folder, same numbers."""
-    from PIL import Image
-
-    from tether.recurrent.report import make_report
-
-    img = np.full((80, 100, 3), 255, np.uint8)  # white free, black walls
-    img[[0, -1], :] = img[:, [0, -1]] = 0
-    img[40, 10:70] = 0
-    Image.fromarray(img).save(tmp_path / "tiny.png")
-    rep = make_report(
-        tmp_path / "out",
-        maps=("tiny",),
-        runs=1,
-        steps=8,
-        n_robots=2,
-        thetas=(12,),
-        settings=("apx_t12_instant", "theta12"),
-        maps_dir=tmp_path,
-        workers=1,
-    )
-    e = rep["maps"]["tiny"]
-    assert e["apx_t12_instant"] == e["theta12"]
-    assert sorted(p.name for p in (tmp_path / "out" / "runs" / "tiny").iterdir()) == ["theta12"]
-    for fig in ("fig4_tiny.png", "fig5.png", "fig6.png"):
-        assert (tmp_path / "out" / fig).exists()
-    # the doc tables are computed from the same run folders
-    from tether.recurrent.report_tables import markdown
-
-    table = markdown(tmp_path / "out")
-    final = 100 * e["theta12"]["final_explored_mean"]
-    assert "| tiny | APX, (b) instantaneous |" in table
-    assert f"**{final:.1f} ± 0.0**" in table

@@ -1,15 +1,22 @@
-"""The report's statistics and the doc tables printed from run folders (issue 13 tables)."""
+"""`tether report --paper recurrent`: the recurrent paper's figures and tables from sweeps."""
 
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
-from tether.recurrent.report_settings import run_dir
-from tether.recurrent.report_tables import ci95, markdown, welch
+from _cli import tether
+from tether.recurrent.report import index_runs
+from tether.recurrent.report_settings import setting_label
+from tether.recurrent.report_tables import ci95, welch
+
+PAPER = Path(__file__).resolve().parents[1] / "src" / "tether" / "scenarios" / "paper"
 
 
 def test_ci95_and_welch_by_hand() -> None:
@@ -27,46 +34,123 @@ def test_ci95_and_welch_by_hand() -> None:
     assert 0.05 < p < 1
 
 
-def test_theta1_is_the_default_binding_run() -> None:
-    assert run_dir(Path("o"), "m", "theta1", 0).parent.name == "theta1_assigned"
-    assert run_dir(Path("o"), "m", "utility", 0).parent.name == "utility_greedy"
-    assert run_dir(Path("o"), "m", "apx_t12_instant", 0).parent.name == "theta12"
-    assert run_dir(Path("o"), "m", "theta3", 2) == Path("o/runs/m/theta3/seed-2")
+def test_setting_labels() -> None:
+    assert setting_label("fig4", {"method": "ilp", "count_planning_time": True}) == "ilp_t12_timed"
+    assert setting_label("fig4", {"method": "apx", "count_planning_time": False}) == (
+        "apx_t12_instant"
+    )
+    assert setting_label("fig5_6", {"theta": 3}) == "theta3"
+    assert setting_label("utility", {"coordination": "none"}) == "utility_none"
+    assert setting_label("relay", {"relay_binding": "frontiers"}) == "theta1_frontiers"
+    with pytest.raises(ValueError, match="unknown campaign kind"):
+        setting_label("fig7", {})
 
 
-def test_comparison_tables_from_a_tiny_report(tmp_path: Path) -> None:
+def _tiny_campaigns(tmp_path: Path, capsys) -> list[Path]:
+    """The four recurrent campaigns on a tiny map (2 robots, 12 steps, 2 seeds), swept."""
     from PIL import Image
-
-    from tether.recurrent.report import make_report
 
     img = np.full((80, 100, 3), 255, np.uint8)  # white free, black walls
     img[[0, -1], :] = img[:, [0, -1]] = 0
     img[40, 10:70] = 0
     Image.fromarray(img).save(tmp_path / "tiny.png")
-    settings = ("theta1", "theta1_frontiers", "utility_greedy", "utility_none")
-    rep = make_report(tmp_path / "out", maps=("tiny",), runs=2, steps=12, n_robots=2,
-                      thetas=(1,), settings=settings, maps_dir=tmp_path, workers=1)  # fmt: skip
-    e = rep["maps"]["tiny"]
-    # theta1 (the default binding) ran under its spelled-out label
-    assert sorted(p.name for p in (tmp_path / "out" / "runs" / "tiny").iterdir()) == [
-        "theta1_assigned", "theta1_frontiers", "utility_greedy", "utility_none"]  # fmt: skip
-    for label in settings:
-        shares = [e[label][f"time_{k}_frac_mean"] for k in
-                  ("moving", "relaying", "waiting", "returning")]  # fmt: skip
-        assert sum(shares) == pytest.approx(1.0)
-        assert len(e[label]["time_to_50pct_s"]) == 2
-    table = markdown(tmp_path / "out")
+    folders = []
+    for name in ("recurrent_fig4", "recurrent_fig5_6", "recurrent_fig5_6_utility",
+                 "recurrent_relay_binding"):  # fmt: skip
+        data = yaml.safe_load((PAPER / f"{name}.yaml").read_text())
+        axes = data["sweep"]["axes"]
+        axes.pop("world.params.stand_in_path")
+        data["world"]["params"].pop("stand_in_path")
+        axes["world.params.path"] = [str(tmp_path / "tiny.png")]
+        if "strategy.params.theta" in axes:
+            axes["strategy.params.theta"] = [1, 12]
+        data["sweep"] = {"axes": axes, "seeds": 2}
+        data["team"]["n_robots"], data["sim"]["max_steps"] = 2, 12
+        (tmp_path / f"{name}.yaml").write_text(yaml.safe_dump(data))
+        folders.append(tmp_path / name)
+        code, _, err = tether(capsys, "sweep", str(tmp_path / f"{name}.yaml"), "--out",
+                              str(folders[-1]), "--executor", "serial")  # fmt: skip
+        assert code == 0, err
+    return folders
+
+
+def test_paper_report_from_the_campaigns_sweeps(tmp_path: Path, capsys) -> None:
+    folders = _tiny_campaigns(tmp_path, capsys)
+    code, out, err = tether(capsys, "report", *map(str, folders), "--paper", "recurrent",
+                            "--out", str(tmp_path / "paper"))  # fmt: skip
+    assert code == 0, err
+    index, kinds = index_runs(folders)
+    assert set(kinds) == {"fig4", "fig5_6", "utility", "relay"}
+    assert set(index.maps) == {"tiny"}
+    expect = {
+        "apx_t12_timed",
+        "ilp_t12_timed",
+        "apx_t12_instant",
+        "ilp_t12_instant",
+        "theta1",
+        "theta12",
+        "utility_greedy",
+        "utility_none",
+        "theta1_assigned",
+        "theta1_frontiers",
+    }
+    assert set(index.settings()) == expect
+    assert all(len(index.of("tiny", s)) == 2 for s in expect)  # two seeds each
+
+    def summaries(setting: str) -> list[dict]:
+        return [json.loads((r / "summary.json").read_text()) for r in index.of("tiny", setting)]
+
+    def same(a: str, b: str) -> bool:
+        keep = ("final_explored_fraction", "out_of_comm_mean_steps", "plans", "base_m")
+        return [{k: s[k] for k in keep} for s in summaries(a)] == [
+            {k: s[k] for k in keep} for s in summaries(b)
+        ]
+
+    # one scenario in two campaigns gives the same runs; another setting does not
+    assert same("apx_t12_instant", "theta12") and same("theta1", "theta1_assigned")
+    assert not same("theta1", "theta12") or not same("utility_greedy", "utility_none")
+    table = (tmp_path / "paper" / "recurrent_paper.md").read_text()
     assert "### theta = 1 against Utility" in table and "### Relay binding" in table
-    runs = sorted((tmp_path / "out" / "runs" / "tiny" / "theta1_assigned").glob("seed-*"))
-    fin = [100 * json.loads((r / "summary.json").read_text())["final_explored_fraction"]
-           for r in runs]  # fmt: skip
+    assert "explored at 4 / 8 / 12 steps [%]" in table  # the runs' own length
+    fin = [100 * s["final_explored_fraction"] for s in summaries("theta1")]
     mu, half = ci95(fin)
     cell = f"{mu:.1f}" if half is None else f"{mu:.1f} [{mu - half:.1f}, {mu + half:.1f}]"
     assert f"| tiny | θ = 1 | **{cell}** |" in table
     assert "| tiny | θ = 1 − Utility (none) |" in table
-    assert "sum to 1 on every one of the 8 runs" in table  # 4 settings x 2 runs
-    assert "| all maps | paired by BS position (2 pairs) |" in table  # 2 seeds, 1 map
-    plans = [json.loads((r / "summary.json").read_text())["plans"] for r in runs]
-    assert f"| {min(plans)}-{max(plans)} / " in table  # theta = 1's plans per run, range
-    for fig in ("fig5.png", "fig6.png", "fig_time.png"):
-        assert (tmp_path / "out" / fig).exists()
+    assert "sum to 1 on every one of the 20 runs" in table  # 10 settings x 2 runs
+    assert "| all maps | paired by BS position (2 pairs) |" in table
+    plans = [s["plans"] for s in summaries("theta1")]
+    assert f"| {min(plans)}-{max(plans)} / " in table
+    numbers = json.loads((tmp_path / "paper" / "recurrent_paper.json").read_text())
+    assert numbers["maps"]["tiny"]["theta12"]["final_explored"] == [
+        s["final_explored_fraction"] for s in summaries("theta12")
+    ]
+    for fig in ("recurrent_fig4_tiny", "recurrent_fig5", "recurrent_fig6", "recurrent_fig_time"):
+        assert (tmp_path / "paper" / "figures" / f"{fig}.png").exists()
+        assert f"(figures/{fig}.png)" in table
+
+
+def test_paper_report_refuses_what_it_cannot_use(tmp_path: Path, capsys) -> None:
+    code, _, err = tether(capsys, "report", str(tmp_path), "--paper", "recurrent")
+    assert code == 2 and "not a finished sweep folder" in err
+    code, _, err = tether(capsys, "report", str(tmp_path), "--paper", "silent")
+    assert code == 2 and "--paper silent: unknown paper; expected one of: recurrent" in err
+    code, _, err = tether(capsys, "report", str(tmp_path), str(tmp_path))
+    assert code == 2 and "give one sweep folder" in err
+    sweep = tmp_path / "s.yaml"
+    sweep.write_text(
+        "team: {n_robots: 2}\nsensing: {range_m: 5}\nsim: {max_steps: 3}\n"
+        "strategy: {name: silent, params: {trajectory: {kind: waypoints, "
+        "waypoints: [[0, 0], [1, 0]]}}}\nsweep: {strategy.params.d0_m: [2.0, 3.0]}\n"
+    )
+    code, _, err = tether(capsys, "sweep", str(sweep), "--out", str(tmp_path / "sw"),
+                          "--executor", "serial")  # fmt: skip
+    assert code == 0, err
+    code, _, err = tether(capsys, "report", str(tmp_path / "sw"), "--paper", "recurrent")
+    assert code == 2 and "not a sweep of one of the recurrent paper's campaigns" in err
+
+
+def test_the_module_is_not_a_second_report_command() -> None:
+    done = subprocess.run([sys.executable, "-m", "tether.recurrent.report", "out"],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 2 and "tether report SWEEP_DIR ... --paper recurrent" in done.stderr

@@ -1,7 +1,7 @@
 """A fixed-layout world is built once per process and shared by later runs, unchanged.
 
 A campaign's worker runs hundreds of trials on one town: the town, its distance field
-and its obstacle index are built for the first and reused (``runner.build_world``,
+and its obstacle index are built for the first and reused (``scenario_world.build_world``,
 ``ObstacleIndex.shared``). Reuse must not change a run: the same scenario and seed
 give the same trajectory whether the world is new or was used by another run before.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tether import runner
+from tether import runner, scenario_world
 from tether.config import load_scenario
 from tether.record import TrajectoryRecorder
 from tether.sim import simulate
@@ -27,7 +27,7 @@ def _run(seed: int, steps: int = 40) -> tuple[np.ndarray, dict, object]:
 
 
 def test_a_reused_world_gives_the_runs_of_a_new_one() -> None:
-    runner._WORLDS.clear()
+    scenario_world._WORLDS.clear()
     clearance._SHARED.clear()
     first_q, first_m, world = _run(3)  # a new world and a new obstacle index
     other_q, _, world_2 = _run(4)  # another run uses (and caches into) both
@@ -39,7 +39,7 @@ def test_a_reused_world_gives_the_runs_of_a_new_one() -> None:
 
 
 def test_only_fixed_layouts_are_kept() -> None:
-    runner._WORLDS.clear()
+    scenario_world._WORLDS.clear()
     sc = load_scenario("multi_target_town")
     rng = np.random.default_rng(0)
     a, b = runner.build_world(sc, rng), runner.build_world(sc, rng)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -15,7 +16,7 @@ import typer
 from rich.console import Console
 
 from tether.config import MAX_SEED
-from tether.errors import TetherError
+from tether.errors import TetherError, TetherWarning
 
 app = typer.Typer(
     add_completion=False,
@@ -34,7 +35,14 @@ SetOpt = Annotated[
     list[str] | None,
     typer.Option("--set", "-s", help="Override a scenario key, e.g. strategy.params.d0_m=5"),
 ]
-
+PluginOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--plugin",
+        "-p",
+        help="Import your own plug-in first: a module name or a .py file (repeatable).",
+    ),
+]
 
 QuickOpt = Annotated[
     bool,
@@ -52,6 +60,13 @@ def _load(scenario: str, overrides: list[str] | None, quick: bool = False):
     return load_scenario_at(scenario, quick=quick, overrides=overrides)
 
 
+def _load_plugins(plugins: list[str] | None) -> None:
+    """Import the ``--plugin`` modules and files, before any scenario is read."""
+    from tether.plugins import load_plugins
+
+    load_plugins(plugins)
+
+
 @app.command()
 def run(
     scenario: ScenarioArg = DEFAULT_SCENARIO,
@@ -65,11 +80,13 @@ def run(
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
     animate_: Annotated[bool, typer.Option("--animate", help="Then `tether animate` it.")] = False,
     view_: Annotated[bool, typer.Option("--view", help="Then `tether view` it.")] = False,
+    plugin: PluginOpt = None,
 ) -> None:
     """Run one scenario and write its run folder (scenario, Parquet records, summary, figures).
 
     Example: tether run scenarios/silent_paper.yaml --set strategy.params.d0_m=5
     """
+    _load_plugins(plugin)
     from tether.runner import run as run_scenario
 
     sc = _load(scenario, set_)
@@ -134,6 +151,7 @@ def sweep(
     ] = None,
     set_: SetOpt = None,
     quick: QuickOpt = False,
+    plugin: PluginOpt = None,
 ) -> None:
     """Run the scenario's `sweep:` combinations x seeds (resumable) into one table of trials.
 
@@ -142,6 +160,7 @@ def sweep(
 
     Example: tether sweep scenarios/silent_paper.yaml --out runs/fig5 --seeds 20
     """
+    _load_plugins(plugin)
     from tether.experiments.progress import progress_for
     from tether.experiments.sweep import run_sweep
     from tether.quicksize import QUICK_SUFFIX
@@ -171,20 +190,51 @@ def sweep(
 
 @app.command()
 def report(
-    sweep_dir: Annotated[Path, typer.Argument(help="A sweep folder written by `tether sweep`.")],
+    sweep_dirs: Annotated[
+        list[Path], typer.Argument(help="Sweep folder(s) written by `tether sweep`.")
+    ],
+    paper: Annotated[
+        str | None,
+        typer.Option(
+            "--paper",
+            help="recurrent: the recurrent paper's Figs. 4-6 and tables from the sweep "
+            "folders of its campaigns (paper/recurrent_*).",
+        ),
+    ] = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option("--out", "-o", help="With --paper: where to write (default: first folder)."),
+    ] = None,
 ) -> None:
     """Write a Markdown report of a sweep: figures with percentile bands and statistics.
 
     Writes SWEEP_DIR/report.md and SWEEP_DIR/figures/. Example: tether report runs/fig5
-    """
-    from tether.experiments.report import write_report
 
-    path = write_report(sweep_dir, command=f"tether report {sweep_dir}")
+    With --paper recurrent, several folders (the sweeps of paper/recurrent_fig4,
+    recurrent_fig5_6, recurrent_fig5_6_utility, recurrent_relay_binding) make the
+    paper's figures and tables: OUT/recurrent_paper.md, .json and OUT/figures/.
+    """
+    command = " ".join(["tether report", *map(str, sweep_dirs)])
+    if paper is not None:
+        from tether.recurrent.report import write_paper_report
+
+        command += f" --paper {paper}" + (f" --out {out_dir}" if out_dir else "")
+        path = write_paper_report(paper, sweep_dirs, out_dir, command=command)
+    else:
+        from tether.experiments.report import write_report
+
+        if len(sweep_dirs) != 1 or out_dir is not None:
+            raise TetherError(
+                "tether report: give one sweep folder (several, and --out, only with --paper)"
+            )
+        path = write_report(sweep_dirs[0], command=command)
     out.print(f"report: {path}", markup=False, highlight=False, soft_wrap=True)
 
 
 @app.command()
-def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False) -> None:
+def validate(
+    scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False, plugin: PluginOpt = None
+) -> None:
     """Check a scenario (schema, strategy parameters, map, initial team, memory) without running.
 
     Runs exactly the checks `tether run` runs before simulating (tether.runner.build),
@@ -192,6 +242,7 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
     scenario that validates is one that runs. The sweep's quick size, if any, is checked
     too (its keys and values); --quick checks the quick size as fully as the full one.
     """
+    _load_plugins(plugin)
     from tether.experiments.plan import check_combinations
     from tether.runfolder import check_writable
     from tether.runner import build, check_sweep, strategy_class
@@ -213,10 +264,11 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
 
 
 @app.command("list")
-def list_() -> None:
-    """List built-in scenarios, strategies and scenes."""
+def list_(plugin: PluginOpt = None) -> None:
+    """List built-in scenarios, strategies and scenes (with installed and --plugin ones)."""
+    _load_plugins(plugin)
     from tether.config import builtin_scenarios, paper_campaigns
-    from tether.plugins import load_builtins
+    from tether.plugins import IGNORED, load_builtins
 
     names = load_builtins()
     out.print("scenarios:   " + ", ".join(builtin_scenarios()), markup=False)
@@ -225,6 +277,8 @@ def list_() -> None:
     out.print("strategies:  " + ", ".join(names["strategies"]), markup=False)
     out.print("scenes:      " + ", ".join(names["scenes"]), markup=False)
     out.print("link models: " + ", ".join(names["link models"]), markup=False)
+    for line in IGNORED:
+        out.print(f"ignored plug-in: {line}", markup=False, highlight=False, soft_wrap=True)
 
 
 RunDirArg = Annotated[Path, typer.Argument(help="A run folder written by `tether run`.")]
@@ -306,6 +360,17 @@ def _usage_line(exc: Exception) -> str:
     return f"error: {message} (see `{command} --help`)"
 
 
+_python_showwarning = warnings.showwarning
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+    """A :class:`TetherWarning` as one ``warning: ...`` line; others as Python shows them."""
+    if issubclass(category, TetherWarning):
+        err.print(f"warning: {message}", highlight=False, markup=False, soft_wrap=True)
+    else:
+        _python_showwarning(message, category, filename, lineno, file, line)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point: run the app, turning user errors into one line on stderr.
 
@@ -313,6 +378,7 @@ def main(argv: list[str] | None = None) -> None:
     option, the field and the fix; usage errors too), 1 an internal error (one
     line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted.
     """
+    warnings.showwarning = _show_warning
     try:
         app(args=argv, prog_name="tether", standalone_mode=False)
     except TetherError as exc:

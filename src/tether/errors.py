@@ -28,3 +28,11 @@ class MapError(TetherError):
 
 class OutputError(TetherError):
     """An output folder cannot be written, or would mix two runs' files."""
+
+
+class TetherWarning(UserWarning):
+    """Something the user should know about a run that still runs (one line).
+
+    The command line prints it as ``warning: <message>``; e.g. a map file not found and
+    replaced by its stand-in (``world.params.stand_in_path``).
+    """

@@ -21,6 +21,8 @@ import importlib
 from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
 
+from tether.errors import TetherError
+
 T = TypeVar("T")
 
 
@@ -41,6 +43,9 @@ class Registry(Generic[T]):
         self.kind = kind
         self._items: dict[str, T] = {}
         self._providers: dict[str, str] = {}  # name -> module whose import registers it
+        self._objects: dict[str, str] = {}  # name -> attribute of the module to register
+        self._origins: dict[str, str] = {}  # name -> where a plug-in came from (installed)
+        self._loading: set[str] = set()  # names whose module is being imported
 
     def register(self, name: str) -> Callable[[T], T]:
         """A decorator that registers its object under ``name``.
@@ -51,7 +56,9 @@ class Registry(Generic[T]):
 
         def decorator(obj: T) -> T:
             provider = self._providers.get(name)
-            if provider is not None and getattr(obj, "__module__", None) != provider:
+            module = str(getattr(obj, "__module__", None))
+            own = module == provider or module.startswith(f"{provider}.")
+            if provider is not None and not own and name not in self._loading:
                 self._load(name)
             old = self._items.get(name)
             if old is not None and old is not obj and _qualname(old) != _qualname(obj):
@@ -60,11 +67,14 @@ class Registry(Generic[T]):
                 )  # the same definition re-run (module reload, notebook) simply replaces it
             self._items[name] = obj
             self._providers.pop(name, None)
+            self._objects.pop(name, None)
             return obj
 
         return decorator
 
-    def provide(self, name: str, module: str) -> None:
+    def provide(
+        self, name: str, module: str, *, attr: str | None = None, origin: str | None = None
+    ) -> None:
         """Declare that importing ``module`` registers ``name`` (imported on first use).
 
         Parameters
@@ -75,19 +85,63 @@ class Registry(Generic[T]):
             The dotted name of the module that defines and registers it (its objects'
             ``__module__``). If another module registered ``name`` already, this one is
             imported now, so the clash is reported as it would be without laziness.
+        attr
+            The module's attribute to register under ``name`` when importing the
+            module does not register it (an installed plug-in's entry point
+            ``module:attr``).
+        origin
+            Where the plug-in comes from (``package tether-foo 1.0``), for messages: a
+            plug-in with an origin that fails to import is reported as a
+            :class:`~tether.errors.TetherError` naming it, not as an internal error.
         """
         old = self._items.get(name)
         if old is None:
             self._providers[name] = module
+            if attr is not None:
+                self._objects[name] = attr
+            if origin is not None:
+                self._origins[name] = origin
         elif getattr(old, "__module__", None) != module:
             importlib.import_module(module)  # its registration reports the clash
 
+    def origin(self, name: str) -> str | None:
+        """Where the installed plug-in ``name`` comes from (``None`` for the others)."""
+        return self._origins.get(name)
+
     def _load(self, name: str) -> None:
-        """Import the module that provides ``name``."""
+        """Import the module that provides ``name`` (and register its attribute if asked)."""
         module = self._providers[name]
-        importlib.import_module(module)
+        origin = self._origins.get(name)
+        self._loading.add(name)
+        try:
+            loaded = importlib.import_module(module)
+        except Exception as exc:
+            if origin is None:
+                raise
+            problem = " ".join(f"{type(exc).__name__}: {exc}".split())
+            raise TetherError(
+                f"{self.kind} {name!r} ({origin}): its module {module} failed to import "
+                f"({problem[:200]}); reinstall or uninstall that package"
+            ) from None
+        finally:
+            self._loading.discard(name)
+        attr = self._objects.get(name)
+        if name not in self._items and attr is not None:
+            obj: object = loaded
+            for part in attr.split("."):
+                obj = getattr(obj, part, None)
+            if obj is not None:
+                self._loading.add(name)
+                try:
+                    self.register(name)(obj)  # type: ignore[arg-type]
+                finally:
+                    self._loading.discard(name)
         if name not in self._items:
-            raise LookupError(f"{module} was imported but registered no {self.kind} {name!r}")
+            where = f" ({origin})" if origin else ""
+            message = f"{module}{where} was imported but registered no {self.kind} {name!r}"
+            if origin is None:
+                raise LookupError(message)
+            raise TetherError(f"{message}; reinstall or uninstall that package")
 
     def get(self, name: str) -> T:
         """The factory registered under ``name`` (its module imported if provided)."""

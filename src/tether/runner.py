@@ -30,19 +30,19 @@ from tether.config import (
     set_dotted,
     sweep_spec,
 )
-from tether.errors import MapError, OutputError, ScenarioError, TetherError
+from tether.errors import OutputError, ScenarioError, TetherError
 from tether.graph import is_connected
 from tether.limits import format_bytes, memory_budget_bytes
 from tether.plugins import load_builtins
 from tether.record import TrajectoryRecorder, summarize
 from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
+from tether.scenario_world import STAND_IN_KEY, build_world, keep_scene_files, scene_files
 from tether.sensing import SensorModel, sensed_pairs
 from tether.sim import Strategy, TeamState, simulate
 from tether.sweepspec import canonical, value_key
 from tether.team import initial_positions
 from tether.viz.plots import link_range_m, links_over_time, team_snapshot
-from tether.world.scenes import make_scene
 from tether.world.world import World
 
 load_builtins()
@@ -66,67 +66,6 @@ class RunOutcome:
     summary: dict[str, Any]
 
 
-#: worlds of procedural scenes with a fixed layout seed (``world.params.seed``), per process
-_WORLDS: dict[str, World] = {}
-_WORLDS_KEPT = 4
-
-
-def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
-    """The scenario's world from the scene registry (``free``, ``map``, ``town``, ...).
-
-    A scene whose layout is fixed by ``world.params.seed`` (and read from no file)
-    is built once per process and shared by later runs with the same parameters:
-    a campaign's worker then builds the town, its distance field and its obstacle
-    index once, not per trial. Nothing in a run changes a world.
-    """
-    src, cfg = scenario.source, scenario.world
-    if cfg.scene not in SCENES:
-        raise ScenarioError(
-            f"{src}: world.scene: unknown scene {cfg.scene!r}; expected one of: "
-            f"{', '.join(SCENES.names())}"
-        )
-    params = dict(cfg.params)
-    if cfg.scene == "free":
-        params.setdefault("dim", cfg.dim)
-    field = "world.params"
-    for key in ("path", "file"):
-        if key in params:
-            field = f"world.params.{key}"
-            if not isinstance(params[key], str) or not params[key]:
-                raise ScenarioError(
-                    f"{src}: {field}: got {params[key]!r}; it must be a file path string "
-                    "(e.g. ../shared/maps/grass.png)"
-                )
-            resolved = scenario.resolve_path(params[key])
-            if not resolved.exists():
-                raise ScenarioError(
-                    f"{src}: {field}: {params[key]}: file not found beside the scenario "
-                    f"({scenario.base_dir}) or from the current directory; give a path "
-                    "relative to one of them or an absolute one"
-                )
-            params[key] = str(resolved)
-    # a procedural layout fixed by its own seed is the same world for every run: keep it
-    # (with its distance field and obstacle index) for the next runs of this process
-    key = None
-    if "seed" in params and field == "world.params":
-        key = repr((cfg.scene, sorted(params.items())))
-    world = _WORLDS.get(key) if key is not None else None
-    if world is None:
-        try:
-            world = make_scene(cfg.scene, rng, **params)
-        except (MapError, ScenarioError) as exc:
-            raise ScenarioError(f"{src}: {field}: {exc}") from None
-        if key is not None:
-            if len(_WORLDS) >= _WORLDS_KEPT:
-                _WORLDS.pop(next(iter(_WORLDS)))
-            _WORLDS[key] = world
-    if world.dim != cfg.dim:
-        raise ScenarioError(
-            f"{src}: world.dim: scene {cfg.scene!r} is {world.dim}-D; set dim: {world.dim}"
-        )
-    return world
-
-
 def make_sensor(scenario: Scenario) -> SensorModel:
     s = scenario.sensing
     return SensorModel(
@@ -144,7 +83,7 @@ def strategy_class(scenario: Scenario) -> type[Strategy]:
     if name not in STRATEGIES:
         raise ScenarioError(
             f"{scenario.source}: strategy.name: unknown strategy {name!r}; expected one of: "
-            f"{', '.join(STRATEGIES.names())}"
+            f"{', '.join(STRATEGIES.names())} (or your own module: --plugin FILE.py)"
         )
     return STRATEGIES.get(name)
 
@@ -266,6 +205,7 @@ def _check_scene_parameter(scenario: Scenario, key: str) -> None:
         return
     factory = SCENES.get(scenario.world.scene)
     accepted = [p for p in inspect.signature(factory).parameters if p != "rng"] + ["seed"]
+    accepted += [STAND_IN_KEY] if "path" in accepted else []
     if parts[2] not in accepted:
         raise ScenarioError(
             f": world.params.{parts[2]}: scene {scenario.world.scene!r} has no such parameter; "
@@ -288,6 +228,7 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
     rng = np.random.default_rng(scenario.seed if seed is None else seed)
     cls = strategy_class(scenario)
     params = strategy_params(scenario, cls)
+    check_link_range(scenario, params)
     check_sweep(scenario, cls)
     world = build_world(scenario, rng)
     sensor = make_sensor(scenario)
@@ -299,6 +240,25 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
     strategy = cls.from_scenario(params, scenario, world, initial, rng)
     check_run_size(scenario, initial, strategy, sensor, pairs)
     return Built(scenario, world, sensor, initial, strategy, rng)
+
+
+def check_link_range(scenario: Scenario, params: Any) -> None:
+    """Refuse a sensing range below the range the strategy keeps links within (``rs_m``).
+
+    The recorded graph is the sensed one (``sensing.range_m``); a strategy with ``rs_m``
+    (the connectivity force's ``Rs``) keeps every link up to it. Below it, the force would
+    count on links the robots cannot sense, and the recorded graph would not be the one
+    the controller keeps connected.
+    """
+    rs = getattr(params, "rs_m", None)
+    if isinstance(rs, int | float) and scenario.sensing.range_m < rs:
+        preset = getattr(params, "preset", None)
+        where = f" (preset {preset})" if preset else ""
+        raise ScenarioError(
+            f"{scenario.source}: sensing.range_m: {scenario.sensing.range_m:g} m is below the "
+            f"strategy's link range Rs = {rs:g} m{where}: it would keep links the robots "
+            f"cannot sense; set sensing.range_m: {rs:g} or lower strategy.params.rs_m"
+        )
 
 
 def check_run_size(
@@ -435,7 +395,9 @@ def run(
         folder.abort()
         raise
     try:
-        folder.write_yaml("scenario.yaml", scenario.model_dump(mode="json"))
+        data = scenario.model_dump(mode="json")
+        kept = keep_scene_files(folder.staging, data, scene_files(scenario)[1])
+        folder.write_yaml("scenario.yaml", data)
         folder.write_table("steps.parquet", recorder.step_columns())
         folder.write_table("robots.parquet", recorder.robot_columns())
         folder.write_table("links.parquet", recorder.link_columns())
@@ -444,6 +406,8 @@ def run(
             for name, fig in run_figures(built, recorder).items():
                 folder.save_figure(fig, name)
         summary = summarize(scenario, seed, result, wall)
+        if kept:  # the files the world read: their copies and hashes
+            summary["scene_files"] = kept
         folder.commit(summary)
     except OSError as exc:  # the disk filled up, the folder was removed, ...
         folder.abort()

@@ -48,6 +48,9 @@ def safe_team(
     lo, hi = (
         world.bounds_m if world.bounds_m is not None else (-np.full(dim, 10.0), np.full(dim, 10.0))
     )
+    if center_m is not None:
+        _check_center(world, np.asarray(center_m, dtype=float), params, obstacles)
+    most = 0  # the most robots placed in one try (for the message)
     for _ in range(max_tries):
         if center_m is not None:
             start = np.asarray(center_m, dtype=float).copy()
@@ -76,8 +79,11 @@ def safe_team(
                 continue
             if obstacles.tree is not None and obstacles.tree.query(cand)[0] <= params.ro_outer_m:
                 continue
+            if not world.points_free(cand[None])[0]:  # inside a thick obstacle, far from its faces
+                continue
             pts.append(cand)
-        if len(pts) < n:
+        most = max(most, len(pts))
+        if len(pts) < n or not world.points_free(pts[0][None])[0]:
             continue
         q = np.asarray(pts)
         if obstacles.tree is not None and obstacles.tree.query(q[0])[0] <= params.ro_outer_m:
@@ -85,4 +91,34 @@ def safe_team(
         lam, _ = compute_weights(q, params, obstacles).fiedler()
         if lam > params.lambda2_min:
             return q
-    raise ValueError(f"could not place {n} robots with a connected weighted graph")
+    where = "around center_m" if center_m is not None else "at random starts"
+    raise ValueError(
+        f"could not place {n} robots with a connected weighted graph {where} in {max_tries} "
+        f"tries (at most {most} fitted, each within R's = {params.rs_inner_m:g} m of another "
+        f"and R'o = {params.ro_outer_m:g} m clear of obstacles); start in a larger free "
+        "space (center_m) or use fewer robots"
+    )
+
+
+def _check_center(
+    world: World, center: np.ndarray, params: ConnectivityParams, obstacles: ObstacleIndex
+) -> None:
+    """``center_m`` must be a point of the world's free space, clear of obstacles by R'o."""
+    if center.shape != (world.dim,) or not np.isfinite(center).all():
+        raise ValueError(f"center_m: must be {world.dim} finite numbers (got {center.tolist()})")
+    if not world.in_bounds(center[None])[0]:
+        raise ValueError(
+            f"center_m: {center.tolist()} is outside the world's bounds "
+            f"{np.round(world.bounds_m, 3).tolist()}; move the start inside them"
+        )
+    if not world.points_free(center[None])[0]:
+        raise ValueError(
+            f"center_m: {center.tolist()} is inside an obstacle; move the start into free space"
+        )
+    if obstacles.tree is not None:
+        gap = float(obstacles.tree.query(center)[0])
+        if gap <= params.ro_outer_m:
+            raise ValueError(
+                f"center_m: {center.tolist()} is {gap:.2f} m from an obstacle, within R'o = "
+                f"{params.ro_outer_m:g} m; move the start farther from walls"
+            )

@@ -30,13 +30,18 @@ __all__ = ["EXECUTORS", "Trial", "TrialOutcome", "check_executor", "execute", "r
 
 @dataclass(frozen=True)
 class Trial:
-    """One run of a sweep: the scenario (validated again where it runs), seed and folder."""
+    """One run of a sweep: the scenario (validated again where it runs), seed and folder.
+
+    ``plugins`` are the ``--plugin`` modules and files to import where the trial runs
+    (:func:`tether.plugins.load_plugin`), before its scenario is validated.
+    """
 
     scenario: dict[str, Any]
     source: str
     base_dir: str
     seed: int
     run_dir: str
+    plugins: tuple[str, ...] = ()
 
 
 #: seconds to wait for a Dask scheduler at ``--address`` before giving up
@@ -76,9 +81,11 @@ def run_trial(trial: Trial) -> TrialOutcome:
     """
     os.environ.setdefault("MPLBACKEND", "Agg")
     from tether.config import scenario_from_dict
+    from tether.plugins import load_plugins
     from tether.runner import run
 
     try:
+        load_plugins(trial.plugins)
         scenario = scenario_from_dict(trial.scenario, trial.source, Path(trial.base_dir))
         outcome = run(scenario, out_dir=trial.run_dir, seed=trial.seed, figures=False)
     except Exception as exc:

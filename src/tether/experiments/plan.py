@@ -24,6 +24,7 @@ from tether.config import (
 )
 from tether.errors import ScenarioError, TetherError
 from tether.experiments.executors import Trial
+from tether.plugins import loaded_plugins
 from tether.runner import build, check_sweep, strategy_class
 from tether.sweepspec import combo_hash
 
@@ -97,6 +98,7 @@ def trials_of(
             "(use fewer seeds or values)"
         )
     out = Path(out_dir)
+    plugins = loaded_plugins()  # imported again where each trial runs
     trials = []
     for combo in combos:
         trial = trial_scenario(scenario, combo)
@@ -104,7 +106,8 @@ def trials_of(
         folder = out / combo_id(combo)
         for seed in seed_list:
             run_dir = str(folder / f"seed-{seed}")
-            trials.append((combo, Trial(data, trial.source, str(trial.base_dir), seed, run_dir)))
+            trial_ = Trial(data, trial.source, str(trial.base_dir), seed, run_dir, plugins)
+            trials.append((combo, trial_))
     return trials
 
 

@@ -1,83 +1,45 @@
-"""The settings of the recurrent-connectivity report: labels, paper files and run folders.
+"""The settings of the recurrent-connectivity report: labels of maps and settings.
 
-Shared by :mod:`tether.recurrent.report` (which runs them) and
-:mod:`tether.recurrent.report_tables` (which prints the doc tables from the run
-folders). The values of a setting live in the paper campaign files
-(``scenarios/paper/recurrent_*.yaml``); a label here only says which file and which
-combination of its ``sweep:`` axes it is (:class:`Setting`), plus, for the issue-13
-variants, the one value the label spells out. Labels with the same scenario share one
-set of run folders (:data:`SAME_RUNS`): the spelled-out labels (``theta1_assigned``,
-``utility_greedy``) name the folders and the short ones (``theta1``, ``utility``: the
-files' defaults) reuse them.
+A *setting* is one combination of a paper campaign's axes other than the map, named by
+a label: ``apx_t12_timed`` / ``ilp_t12_instant`` (Fig. 4: method and whether planning
+time is counted, ``paper/recurrent_fig4``), ``theta<k>`` (Figs. 5-6,
+``paper/recurrent_fig5_6``), ``utility_<coordination>`` (the Utility baseline,
+``paper/recurrent_fig5_6_utility``) and ``theta1_<binding>`` (the relay binding at
+theta = 1, ``paper/recurrent_relay_binding``). :func:`setting_label` gives a trial's
+label from its campaign and values.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from pathlib import Path
+from collections.abc import Mapping
 from typing import Any
 
-__all__ = [
-    "MAP_LABELS",
-    "SAME_RUNS",
-    "Setting",
-    "display_name",
-    "run_dir",
-    "settings_table",
-]
+__all__ = ["CAMPAIGNS", "MAP_LABELS", "display_name", "setting_label"]
 
+#: map file stem -> the paper's name of the map
 MAP_LABELS = {"grass": "Cluttered", "offices": "Office", "open": "Open"}
 
-#: the paper files (``scenarios/paper/<name>.yaml``) the settings come from
-FIG4, FIG5_6, UTILITY = "recurrent_fig4", "recurrent_fig5_6", "recurrent_fig5_6_utility"
-
-#: labels whose scenario is another label's: they share its run folders (the report checks)
-SAME_RUNS = {"apx_t12_instant": "theta12", "theta1": "theta1_assigned", "utility": "utility_greedy"}
-
-
-@dataclass(frozen=True)
-class Setting:
-    """One setting: a combination of a paper file's sweep, and the values a variant sets.
-
-    ``pick`` gives the values of the file's axes other than the map
-    (``world.params.path``) that select the combination; ``variant`` the dotted keys
-    set on top of it (the issue-13 variants the paper files do not sweep).
-    """
-
-    file: str
-    pick: dict[str, Any] = field(default_factory=dict)
-    variant: dict[str, Any] = field(default_factory=dict)
+#: campaign kind -> the paper campaign it is run from (``tether sweep paper/<name>``)
+CAMPAIGNS = {
+    "fig4": "paper/recurrent_fig4",
+    "fig5_6": "paper/recurrent_fig5_6",
+    "utility": "paper/recurrent_fig5_6_utility",
+    "relay": "paper/recurrent_relay_binding",
+}
 
 
-def settings_table(thetas: tuple[int, ...] = (1, 3, 6, 9, 12)) -> dict[str, Setting]:
-    """Every setting by label (Fig. 4, Figs. 5-6, relay binding, Utility both ways)."""
-    out: dict[str, Setting] = {}
-    for mode, timed in (("timed", True), ("instant", False)):
-        for method in ("apx", "ilp"):
-            pick = {"strategy.params.method": method, "strategy.params.count_planning_time": timed}
-            out[f"{method}_t12_{mode}"] = Setting(FIG4, pick)
-    for th in thetas:
-        out[f"theta{th}"] = Setting(FIG5_6, {"strategy.params.theta": th})
-    # relay binding both ways at theta = 1 (the measurement behind the default)
-    for binding in ("assigned", "frontiers"):
-        variant = {"strategy.params.relay_binding": binding}
-        out[f"theta1_{binding}"] = Setting(FIG5_6, {"strategy.params.theta": 1}, variant)
-    out["utility"] = Setting(UTILITY)
-    for coordination in ("greedy", "none"):
-        variant = {"strategy.params.coordination": coordination}
-        out[f"utility_{coordination}"] = Setting(UTILITY, {}, variant)
-    return out
-
-
-def run_dir(out: Path, m: str, label: str, k: int) -> Path:
-    """Run folder of ``label`` on map ``m``, seed ``k``; labels of one scenario share it.
-
-    ``apx_t12_instant`` (Fig. 4b) and ``theta12`` (Figs. 5-6) are the same
-    scenario; with the same seed the simulation is deterministic, so it runs once
-    (under ``theta12``); ``theta1`` runs under ``theta1_assigned`` and ``utility``
-    under ``utility_greedy`` (:data:`SAME_RUNS`).
-    """
-    return Path(out) / "runs" / m / SAME_RUNS.get(label, label) / f"seed-{k}"
+def setting_label(kind: str, params: Mapping[str, Any]) -> str:
+    """The label of a trial of campaign ``kind`` whose strategy parameters are ``params``."""
+    if kind == "fig4":
+        mode = "timed" if params.get("count_planning_time") else "instant"
+        return f"{params.get('method', 'apx')}_t12_{mode}"
+    if kind == "fig5_6":
+        return f"theta{params.get('theta', 1)}"
+    if kind == "utility":
+        return f"utility_{params.get('coordination', 'greedy')}"
+    if kind == "relay":
+        return f"theta1_{params.get('relay_binding', 'assigned')}"
+    raise ValueError(f"unknown campaign kind {kind!r}; expected one of: {', '.join(CAMPAIGNS)}")
 
 
 def display_name(label: str) -> str:

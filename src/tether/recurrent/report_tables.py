@@ -1,45 +1,71 @@
-"""Markdown tables of the Figs. 4-6 re-make, computed from the report's run folders.
+"""Markdown tables of the Figs. 4-6 re-make, computed from the campaigns' run folders.
 
-``python -m tether.recurrent.report_tables OUT_DIR`` prints the tables of
-``docs/recurrent.md`` for the runs that :mod:`tether.recurrent.report` wrote under
-``OUT_DIR/runs/<map>/<setting>/seed-<k>``: explored area known at the BS after 300,
-600 and 900 steps (mean over runs, and mean ± sample sd at the end), the time robots
-spend out of communication (steps per robot), and per-plan solver times (Figs. 4-6);
-theta = 1 against both Utility variants with 95 % confidence intervals (Student t over
-the runs; differences by Welch's t), the relay binding both ways, and where the
-robots' time goes (issue 13). Tables whose runs are missing are left out.
+:func:`markdown` makes the tables of ``docs/recurrent.md`` (``tether report --paper
+recurrent`` writes them) for the runs of a :class:`RunIndex` (the run folders of each
+map and setting, found in the campaigns' sweep folders by :mod:`tether.recurrent.report`):
+explored area known at the BS after a third, two thirds and all of the steps (300, 600
+and 900 in the paper's setting; mean over runs, and mean ± sample sd at the end), the
+time robots spend out of communication (steps per robot), and per-plan solver times
+(Figs. 4-6); theta = 1 against both Utility variants with 95 % confidence intervals
+(Student t over the runs; differences by Welch's t), the relay binding both ways, and
+where the robots' time goes. Tables whose runs are missing are left out.
 """
 
 from __future__ import annotations
 
 import json
-import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-from tether.recurrent.report_settings import MAP_LABELS, display_name, run_dir
+from tether.recurrent.report_settings import display_name
 
-__all__ = ["ci95", "markdown", "run_statistics", "share_sum_error", "welch"]
+__all__ = ["RunIndex", "ci95", "markdown", "run_statistics", "share_sum_error", "welch"]
 
-MAPS = MAP_LABELS
 FIG4 = {
     "apx_t12_timed": "APX, (a) planning time counted",
     "ilp_t12_timed": "ILP, (a) planning time counted",
-    "theta12": "APX, (b) instantaneous",
+    "apx_t12_instant": "APX, (b) instantaneous",
     "ilp_t12_instant": "ILP, (b) instantaneous",
 }
 FIG5 = ("theta1", "theta3", "theta6", "theta9", "theta12", "utility_greedy", "utility_none")
 COMPARED = ("theta1", "utility_greedy", "utility_none")
 
 
-def _runs(out: Path, m: str, setting: str) -> list[Path]:
-    folder = run_dir(out, m, setting, 0).parent
-    if not folder.exists():
-        folder = out / "runs" / m / setting
-    return sorted(p for p in folder.glob("seed-*") if (p / "summary.json").exists())
+@dataclass
+class RunIndex:
+    """The finished run folders of each map and setting, in seed order.
+
+    Attributes
+    ----------
+    runs : dict
+        ``(map key, setting label) -> [run folder, ...]`` (settings:
+        :func:`tether.recurrent.report_settings.display_name` names them).
+    maps : dict
+        Map key -> its name in tables and figures, in display order.
+    """
+
+    runs: dict[tuple[str, str], list[Path]] = field(default_factory=dict)
+    maps: dict[str, str] = field(default_factory=dict)
+
+    def of(self, m: str, setting: str) -> list[Path]:
+        """The run folders of ``setting`` on map ``m`` (empty if none)."""
+        return self.runs.get((m, setting), [])
+
+    def settings(self) -> list[str]:
+        """Every setting with runs, in the order first found."""
+        return list(dict.fromkeys(s for _, s in self.runs))
+
+    def all_runs(self) -> list[Path]:
+        return [r for runs in self.runs.values() for r in runs]
+
+    def steps(self) -> int:
+        """The longest run's steps (900 in the paper's setting)."""
+        return max((json.loads((r / "summary.json").read_text())["steps"]
+                    for r in self.all_runs()), default=0)  # fmt: skip
 
 
 def _summaries(runs: list[Path]) -> list[dict]:
@@ -125,19 +151,19 @@ def _plan_times(runs: list[Path]) -> np.ndarray:
     return np.asarray([t for t in times if t is not None], dtype=float)
 
 
-def markdown(out_dir: str | Path) -> str:
-    """The Fig. 4, Fig. 5 and Fig. 6 tables for the runs found in ``out_dir``."""
-    out = Path(out_dir)
-    found = sorted(p.name for p in (out / "runs").iterdir() if p.is_dir())
-    maps = {m: MAPS.get(m, m) for m in [*[m for m in MAPS if m in found], *found] if m in found}
+def markdown(index: RunIndex) -> str:
+    """The Fig. 4, Fig. 5 and Fig. 6 tables (and the comparisons) for the runs of ``index``."""
+    maps = index.maps
+    end = index.steps()
+    a, b = end // 3, 2 * end // 3
     lines = [
-        "| map | setting | explored at 300 / 600 / 900 steps [%] | per run at 900 "
+        f"| map | setting | explored at {a} / {b} / {end} steps [%] | per run at {end} "
         "| out of comm [steps] | plan time median / max [s] |",
         "| --- | --- | --- | --- | --- | --- |",
     ]
     for m, name in maps.items():
         for setting, label in FIG4.items():
-            runs = _runs(out, m, setting)
+            runs = index.of(m, setting)
             if not runs:
                 continue
             curves = [_explored(r) for r in runs]
@@ -146,7 +172,7 @@ def markdown(out_dir: str | Path) -> str:
                    for r in runs]  # fmt: skip
             pt = _plan_times(runs)
             lines.append(
-                f"| {name} | {label} | {_at(curves, 300):.1f} / {_at(curves, 600):.1f} / "
+                f"| {name} | {label} | {_at(curves, a):.1f} / {_at(curves, b):.1f} / "
                 f"**{_pm(final)}** | {' '.join(f'{f:.0f}' for f in final)} | "
                 f"{_pm(ooc, '{:.0f}')} | {np.median(pt):.3g} / {pt.max():.3g} |"
             )
@@ -156,30 +182,30 @@ def markdown(out_dir: str | Path) -> str:
     for m, name in maps.items():
         at300, at900, ooc = [], [], []
         for setting in FIG5:
-            runs = _runs(out, m, setting)
+            runs = index.of(m, setting)
             if not runs:
                 at300.append("-"), at900.append("-"), ooc.append("-")
                 continue
             curves = [_explored(r) for r in runs]
-            at300.append(f"{_at(curves, 300):.1f}")
+            at300.append(f"{_at(curves, a):.1f}")
             at900.append(_pm([100 * c[-1] for c in curves]))
             occ = [json.loads((r / "summary.json").read_text())["out_of_comm_mean_steps"]
                    for r in runs]  # fmt: skip
             ooc.append(_pm(occ, "{:.0f}"))
-        fig5.append(f"| {name}, explored at 300 steps [%] | " + " | ".join(at300) + " |")
-        fig5.append(f"| {name}, explored at 900 steps [%] | " + " | ".join(at900) + " |")
-        fig6.append(f"| {name} [steps per robot, of 900] | " + " | ".join(ooc) + " |")
-    fig5 += _plans_row(out, maps) + _anova(out, maps)
+        fig5.append(f"| {name}, explored at {a} steps [%] | " + " | ".join(at300) + " |")
+        fig5.append(f"| {name}, explored at {end} steps [%] | " + " | ".join(at900) + " |")
+        fig6.append(f"| {name} [steps per robot, of {end}] | " + " | ".join(ooc) + " |")
+    fig5 += _plans_row(index, maps) + _anova(index, maps)
     parts = ["### Fig. 4", "", *lines, "", "### Fig. 5", "", *fig5, "", "### Fig. 6", "", *fig6, ""]
-    parts += _comparison(out, maps) + _binding(out, maps) + _shares(out, maps)
-    return "\n".join(parts)
+    parts += _comparison(index, maps) + _binding(index, maps) + _shares(index, maps)
+    return "\n".join(parts).replace("at 900 steps", f"at {end} steps")
 
 
-def _plans_row(out: Path, maps: dict[str, str]) -> list[str]:
+def _plans_row(index: RunIndex, maps: dict[str, str]) -> list[str]:
     """Plans per run and mean plan time of every theta: range over runs and maps."""
     cells = []
     for setting in FIG5:
-        ss = [s for m in maps for s in _summaries(_runs(out, m, setting))]
+        ss = [s for m in maps for s in _summaries(index.of(m, setting))]
         if setting.startswith("utility") or not ss:
             cells.append("-")
             continue
@@ -190,13 +216,13 @@ def _plans_row(out: Path, maps: dict[str, str]) -> list[str]:
     return [f"| {label} | " + " | ".join(cells) + " |"]
 
 
-def _anova(out: Path, maps: dict[str, str]) -> list[str]:
+def _anova(index: RunIndex, maps: dict[str, str]) -> list[str]:
     """theta = 1 against theta = 12 at the end: one-way ANOVA p-value per map."""
     from scipy.stats import f_oneway
 
     found = []
     for m, name in maps.items():
-        a, b = (_summaries(_runs(out, m, s)) for s in ("theta1", "theta12"))
+        a, b = (_summaries(index.of(m, s)) for s in ("theta1", "theta12"))
         if len(a) > 1 and len(b) > 1:
             fa, fb = ([100 * s["final_explored_fraction"] for s in x] for x in (a, b))
             diff = np.mean(fa) - np.mean(fb)
@@ -222,7 +248,7 @@ def _time_to(ss: list[dict], key: str) -> str:
     return f"{np.mean(hit):.0f}" + ("" if len(hit) == len(ss) else f" ({len(hit)}/{len(ss)})")
 
 
-def _comparison(out: Path, maps: dict[str, str]) -> list[str]:
+def _comparison(index: RunIndex, maps: dict[str, str]) -> list[str]:
     """theta = 1 against Utility (greedy, none): CIs of the means and of the differences."""
     lines = [
         "### theta = 1 against Utility (95 % confidence intervals)",
@@ -237,7 +263,7 @@ def _comparison(out: Path, maps: dict[str, str]) -> list[str]:
     for m, name in maps.items():
         finals: dict[str, list[float]] = {}
         for setting in COMPARED:
-            ss = _summaries(_runs(out, m, setting))
+            ss = _summaries(index.of(m, setting))
             if not ss:
                 continue
             found = True
@@ -260,7 +286,7 @@ def _comparison(out: Path, maps: dict[str, str]) -> list[str]:
     return [*lines, *diffs, ""] if found else []
 
 
-def _binding(out: Path, maps: dict[str, str]) -> list[str]:
+def _binding(index: RunIndex, maps: dict[str, str]) -> list[str]:
     """theta = 1 with P_f for every assigned robot against the paper's rule."""
     lines = [
         "### Relay binding at theta = 1 (95 % confidence intervals)",
@@ -274,7 +300,7 @@ def _binding(out: Path, maps: dict[str, str]) -> list[str]:
     for m, name in maps.items():
         finals = {}
         for rule in ("assigned", "frontiers"):
-            ss = _summaries(_runs(out, m, f"theta1_{rule}"))
+            ss = _summaries(index.of(m, f"theta1_{rule}"))
             if not ss:
                 continue
             found = True
@@ -304,7 +330,7 @@ def _binding(out: Path, maps: dict[str, str]) -> list[str]:
     return [*lines, ""] if found else []
 
 
-def _shares(out: Path, maps: dict[str, str]) -> list[str]:
+def _shares(index: RunIndex, maps: dict[str, str]) -> list[str]:
     """Where the robots' time goes: moving / relaying / waiting / returning."""
     lines = [
         "### Where the robots' time goes [% of robot time, mean over runs]",
@@ -315,7 +341,7 @@ def _shares(out: Path, maps: dict[str, str]) -> list[str]:
     found = False
     for m, name in maps.items():
         for setting in ("theta1", "theta12", "utility_greedy", "utility_none"):
-            ss = _summaries(_runs(out, m, setting))
+            ss = _summaries(index.of(m, setting))
             if not ss or "time_moving_frac" not in ss[0]:
                 continue
             found = True
@@ -324,21 +350,17 @@ def _shares(out: Path, maps: dict[str, str]) -> list[str]:
             lines.append(f"| {name} | {display_name(setting)} | " + " | ".join(cells) + " |")
     if not found:
         return []
-    n, err = share_sum_error(out)
+    n, err = share_sum_error(index)
     lines += ["", f"The four shares sum to 1 on every one of the {n} runs with them "
               f"(largest deviation {err:.1e})."]  # fmt: skip
     return [*lines, ""]
 
 
-def share_sum_error(out: Path) -> tuple[int, float]:
-    """Runs under ``out/runs`` that report time shares, and the largest ``|sum - 1|``."""
+def share_sum_error(index: RunIndex) -> tuple[int, float]:
+    """Runs of ``index`` that report time shares, and the largest ``|sum - 1|``."""
     errors = []
-    for path in sorted((Path(out) / "runs").glob("*/*/seed-*/summary.json")):
-        s = json.loads(path.read_text())
+    for run in index.all_runs():
+        s = json.loads((run / "summary.json").read_text())
         if all(k in s for k in SHARES):
             errors.append(abs(sum(s[k] for k in SHARES) - 1.0))
     return len(errors), max(errors, default=0.0)
-
-
-if __name__ == "__main__":
-    print(markdown(sys.argv[1]))

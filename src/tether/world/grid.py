@@ -11,6 +11,7 @@ Points outside the grid are treated as occupied: robots cannot leave the map.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -22,6 +23,24 @@ from tether.world.los import segment_free
 #: the most cells a grid (a scene, a map image, rasterised points) may have: 50 million
 #: cells are 50 MB as booleans and some 400 MB for each float layer derived from them
 MAX_CELLS = 50_000_000
+
+
+#: relative tolerance of :func:`cells_spanning` (floating-point error of a product)
+CELL_TOLERANCE = 1e-9
+
+
+def cells_spanning(length_m: float, resolution_m: float) -> int:
+    """The fewest cells of ``resolution_m`` that cover ``length_m`` (at least 1).
+
+    A length that is a whole number of cells up to floating-point error counts as that
+    number: ``cells_spanning(484 * 0.1, 0.1) == 484`` although ``484 * 0.1 / 0.1`` is
+    ``484.00000000000006``.
+    """
+    ratio = length_m / resolution_m
+    nearest = round(ratio)
+    if math.isclose(ratio, nearest, rel_tol=CELL_TOLERANCE, abs_tol=CELL_TOLERANCE):
+        return max(int(nearest), 1)
+    return max(math.ceil(ratio), 1)
 
 
 @dataclass(eq=False)
@@ -195,7 +214,13 @@ class OccupancyGrid:
     ) -> OccupancyGrid:
         """Rasterise an obstacle point set into a grid covering ``bounds_m`` (``(2, dim)``)."""
         bounds_m = np.asarray(bounds_m, dtype=float)
-        extent = np.maximum(np.ceil((bounds_m[1] - bounds_m[0]) / resolution_m), 1)
+        with np.errstate(over="ignore"):
+            ratio = (bounds_m[1] - bounds_m[0]) / resolution_m
+        if not np.isfinite(ratio).all() or float(np.prod(np.maximum(ratio, 1))) > MAX_CELLS:
+            extent = np.maximum(np.ceil(ratio), 1)
+        else:  # whole cells up to floating-point error: 484 * 0.1 m is 484 cells, not 485
+            extent = np.array([cells_spanning(float(s), resolution_m) for s in
+                               bounds_m[1] - bounds_m[0]], dtype=float)  # fmt: skip
         if not np.isfinite(extent).all() or float(np.prod(extent)) > MAX_CELLS:
             raise ValueError(
                 f"a grid of {' x '.join(f'{e:.3g}' for e in extent)} cells is more than "

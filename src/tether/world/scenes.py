@@ -10,7 +10,8 @@ name            dim   what
 ``empty``       3     obstacle-free 50 m x 70 m box (continuous paper, Sec. 4)
 ``town``        3     50 m x 70 m of streets and box buildings (Sec. 4, Fig. 7)
 ``office``      3     about 10 m x 15 m: rooms along a corridor, with doors (Fig. 8)
-``map``         2     a PNG/PGM or ROS YAML map file (:func:`~tether.world.maps.load_map`)
+``map``         2/3   a PNG/PGM or ROS YAML map file (:func:`~tether.world.maps.load_map`);
+                      in 3-D its obstacles are walls up to ``height_m``
 ``user_points`` 2/3   obstacle points from a ``.npy``/``.csv``/``.xyz`` file
 =============== ===== =======================================================
 
@@ -23,14 +24,18 @@ per ``point_spacing_m``, so every point lies in an occupied cell.
 from __future__ import annotations
 
 import inspect
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
-from tether.errors import MapError, ScenarioError
+from tether.config import MAX_LENGTH_M
+from tether.errors import MapError, ScenarioError, TetherWarning
 from tether.registry import SCENES
+from tether.world.extrude import coarsen, extrude
 from tether.world.grid import OccupancyGrid
 from tether.world.maps import load_map
 from tether.world.points import load_points
@@ -111,13 +116,40 @@ def map_scene(
     occupied_thresh: float = 0.65,
     free_thresh: float = 0.196,
     negate: bool = False,
+    dim: int = 2,
+    height_m: float | None = None,
+    cell_m: float | None = None,
+    point_spacing_m: float | None = None,
 ) -> World:
-    """A 2-D world from a map file (PNG/PGM image or ROS map_server YAML).
+    """A world from a map file (PNG/PGM image or ROS map_server YAML), 2-D or raised to 3-D.
 
-    Parameters are those of :func:`tether.world.maps.load_map`; unknown cells
-    are obstacles. Obstacle points are the centres of the obstacles' boundary
-    cells.
+    Parameters are those of :func:`tether.world.maps.load_map`; unknown cells are
+    obstacles. ``cell_m`` (a whole multiple of the map's resolution) makes the cells
+    coarser: a coarse cell is an obstacle when any of its pixels is. With ``dim: 3`` the
+    map is a building: every obstacle cell a wall from the floor (``z = 0``) to the
+    ceiling ``height_m`` (rounded up to whole cells), which are the world's vertical
+    bounds (:func:`tether.world.extrude.extrude`). Obstacle points are the centres of the
+    obstacles' boundary cells (in 3-D, the walls' faces), thinned to about one per
+    ``point_spacing_m`` if given.
     """
+    if dim not in (2, 3) or isinstance(dim, bool):
+        raise ScenarioError(f"scene 'map': dim: must be 2 or 3 (got {dim!r})")
+    if dim == 2 and height_m is not None:
+        raise ScenarioError(
+            "scene 'map': height_m: a 2-D map has no height; set world.dim: 3 to raise its "
+            "obstacles to walls, or remove height_m"
+        )
+    if dim == 3 and height_m is None:
+        raise ScenarioError(
+            "scene 'map': height_m: a 3-D map needs the height of its walls (the ceiling), "
+            "e.g. height_m: 3.0"
+        )
+    if height_m is not None:
+        check_number("map", "height_m", height_m, 1e-6, 1e4)
+    if cell_m is not None:
+        check_positive("map", "cell_m", cell_m)
+    if point_spacing_m is not None:
+        check_positive("map", "point_spacing_m", point_spacing_m)
     grid = load_map(
         path,
         resolution_m=resolution_m,
@@ -126,8 +158,14 @@ def map_scene(
         free_thresh=free_thresh,
         negate=negate,
     )
-    points = grid.surface_points()
-    return World(dim=2, grid=grid, obstacle_points=points, name="map", meta={"path": str(path)})
+    if cell_m is not None:
+        grid = coarsen(grid, cell_m)
+    meta: dict[str, Any] = {"path": str(path)}
+    if dim == 3:
+        grid = extrude(grid, height_m)
+        meta["height_m"] = float(grid.size_m[2])
+    points = grid.surface_points(point_spacing_m)
+    return World(dim=dim, grid=grid, obstacle_points=points, name="map", meta=meta)
 
 
 @SCENES.register("user_points")
@@ -138,27 +176,28 @@ def user_points(
     bounds_m: Any = None,
     resolution_m: float = 0.25,
     margin_m: float = 2.0,
+    floor_m: float | None = None,
+    ceiling_m: float | None = None,
+    inflate_m: float = 0.0,
 ) -> World:
     """A world from a file of obstacle points (``.npy``, ``.csv``, ``.xyz``; x y [z]).
 
-    The grid covers ``bounds_m`` (``[[lower corner], [upper corner]]``), by
-    default the points' bounding box grown by ``margin_m``; a cell holding a
-    point is occupied. Points outside the bounds are dropped; the world's
-    obstacle points are the remaining user points themselves.
+    The grid covers ``bounds_m`` (``[[lower corner], [upper corner]]``), by default the
+    points' box grown by ``margin_m`` in x and y; in 3-D from the floor ``floor_m``
+    (default: the lowest point) to the ceiling ``ceiling_m`` (default: the top of the
+    cells holding the highest points, so nothing passes above the tallest obstacle).
+    A cell holding a point is occupied, and so is every cell within ``inflate_m`` of one:
+    points sampling a wall make it solid when neighbours are at most ``resolution_m``
+    apart (else give ``inflate_m`` about half their spacing); sparser points are warned
+    about (:class:`~tether.errors.TetherWarning`). Points outside the bounds are dropped.
+    The world's obstacle points are the remaining user points (with ``inflate_m``, the
+    faces of the inflated obstacles).
     """
     points = load_points(path)
     dim = points.shape[1]
     res = check_positive("user_points", "resolution_m", resolution_m)
-    if bounds_m is None:
-        margin = max(check_number("user_points", "margin_m", margin_m, 0.0, float("inf")), res)
-        bounds = np.stack([points.min(axis=0) - margin, points.max(axis=0) + margin])
-    else:
-        bounds = floats(bounds_m)
-        if bounds is None or bounds.shape != (2, dim) or not np.all(bounds[1] > bounds[0]):
-            raise MapError(
-                f"{path}: bounds_m: must be [[lower corner], [upper corner]] with {dim} "
-                f"numbers each (the file's points are {dim}-D), upper > lower (got {bounds_m!r})"
-            )
+    inflate = check_number("user_points", "inflate_m", inflate_m, 0.0, 1e4)
+    bounds = _point_bounds(path, points, bounds_m, res, margin_m, floor_m, ceiling_m)
     try:
         grid = OccupancyGrid.from_points(points, bounds, res)
     except ValueError as exc:
@@ -169,15 +208,93 @@ def user_points(
             f"{path}: bounds_m: none of the {len(points)} points lies inside {bounds.tolist()}; "
             "widen the bounds or omit them"
         )
-    world = World(
+    warn_sparse(path, points[keep], res, inflate)
+    obstacle_points = points[keep]
+    if inflate > 0:
+        grown = ndimage.distance_transform_edt(~grid.occupied) * res <= inflate
+        grid = OccupancyGrid(grown, res, grid.origin_m)
+        obstacle_points = grid.surface_points()
+    return World(
         dim=dim,
         bounds_m=grid.bounds_m,
         grid=grid,
-        obstacle_points=points[keep],
+        obstacle_points=obstacle_points,
         name="user_points",
         meta={"path": str(path), "dropped_points": int((~keep).sum())},
     )
-    return world
+
+
+def _point_bounds(
+    path: str,
+    points: np.ndarray,
+    bounds_m: Any,
+    res: float,
+    margin_m: Any,
+    floor_m: Any,
+    ceiling_m: Any,
+) -> np.ndarray:
+    """The ``(2, dim)`` bounds of a point cloud's world (see :func:`user_points`)."""
+    dim = points.shape[1]
+    if dim == 2 and (floor_m is not None or ceiling_m is not None):
+        name = "floor_m" if floor_m is not None else "ceiling_m"
+        raise MapError(f"{path}: {name}: the file's points are 2-D (x y): they have no "
+                       f"floor or ceiling; remove {name}")  # fmt: skip
+    if bounds_m is not None:
+        if floor_m is not None or ceiling_m is not None:
+            raise MapError(f"{path}: bounds_m: give bounds_m or floor_m / ceiling_m, not both "
+                           "(bounds_m holds the floor and ceiling as its z)")  # fmt: skip
+        bounds = floats(bounds_m)
+        if bounds is None or bounds.shape != (2, dim) or not np.all(bounds[1] > bounds[0]):
+            raise MapError(
+                f"{path}: bounds_m: must be [[lower corner], [upper corner]] with {dim} "
+                f"numbers each (the file's points are {dim}-D), upper > lower (got {bounds_m!r})"
+            )
+        return bounds
+    margin = max(check_number("user_points", "margin_m", margin_m, 0.0, float("inf")), res)
+    bounds = np.stack([points.min(axis=0) - margin, points.max(axis=0) + margin])
+    if dim == 3:
+        z = points[:, 2]
+        lo = z.min()
+        if floor_m is not None:
+            lo = check_number("user_points", "floor_m", floor_m, -MAX_LENGTH_M, MAX_LENGTH_M)
+        if ceiling_m is None:  # the top of the cells that hold the highest points
+            hi = lo + (np.floor((z.max() - lo) / res) + 1) * res
+        else:
+            hi = check_number("user_points", "ceiling_m", ceiling_m, -MAX_LENGTH_M, MAX_LENGTH_M)
+        if not hi > lo:
+            raise MapError(f"{path}: ceiling_m: must be above the floor {lo:g} m (got {hi:g})")
+        bounds[:, 2] = lo, hi
+    return bounds
+
+
+#: the most points whose spacing :func:`warn_sparse` measures (a random sample beyond)
+SPACING_SAMPLE = 20_000
+
+
+def warn_sparse(path: str, points: np.ndarray, resolution_m: float, inflate_m: float) -> None:
+    """Warn when points sit farther apart than a cell (+ inflation): walls would have gaps.
+
+    The spacing is the median distance from a point to its nearest neighbour (over a
+    sample of :data:`SPACING_SAMPLE` points); more than ``resolution_m + 2 inflate_m``
+    leaves free cells between neighbouring points of one wall.
+    """
+    if len(points) < 2:
+        return
+    sample = points
+    if len(points) > SPACING_SAMPLE:
+        pick = np.random.default_rng(0).choice(len(points), SPACING_SAMPLE, replace=False)
+        sample = points[pick]
+    spacing = float(np.median(cKDTree(points).query(sample, k=2)[0][:, 1]))
+    if spacing > resolution_m + 2 * inflate_m:
+        warnings.warn(
+            TetherWarning(
+                f"{path}: points are {spacing:.3g} m apart (median to the nearest), more than "
+                f"resolution_m {resolution_m:g}: walls sampled this sparsely have gaps robots "
+                f"can pass; give resolution_m >= {spacing:.3g} or inflate_m: "
+                f"{spacing / 2:.3g}"
+            ),
+            stacklevel=2,
+        )
 
 
 # --------------------------------------------------------------------------- utilities
