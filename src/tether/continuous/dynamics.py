@@ -41,10 +41,11 @@ within ``Ro`` of an obstacle):
 
 * ``detect`` (the default): nothing is vetoed; every such sub-step is counted
   (``safe_set_exits``), so the result is the controller's own;
-* ``enforce``: the old safety net: a candidate must keep ``keep_fraction`` of the margin
+* ``enforce``: a safety net: a candidate must keep ``keep_fraction`` of the margin
   ``lambda2 - lambda2_min`` (and exceed it by ``lambda2_tolerance``); otherwise ``h`` is
-  halved, and if no step is admissible the team brakes to rest for the rest of the
-  period (a stall). Every rejection and stall is a ``guard_intervention``;
+  halved, and if no step is admissible, or the guard has rejected ``guard_budget``
+  candidates in this period, the team brakes to rest for the rest of the period (a
+  stall). Every rejection is a ``guard_intervention``;
 * ``off``: no check (the estimator then never computes the exact lambda2).
 
 A run whose guard intervened, whose step rule had to give up (``tolerance_misses``) or
@@ -85,6 +86,7 @@ class IntegratorParams:
     growth: float = 2.0
     guard: Guard = "detect"
     keep_fraction: float = 0.5
+    guard_budget: int = 100
     lambda2_tolerance: float = 1e-9
     max_retries: int = 30
     max_substeps: int = 10_000
@@ -322,6 +324,8 @@ def integrate(
             guarded = guard == "enforce" and not (ev1[0] > floor and ev1[0] > lambda2_min + tol)
             if guarded:
                 stats.guard_interventions += 1
+                if stats.guard_interventions >= params.guard_budget:
+                    break  # the guard has held the team long enough this period: brake
                 h *= 0.5
                 continue
             f1, f_c1, h_move1 = system.forces(q1, v1, ev1[1])

@@ -254,6 +254,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._prime_eff = float("nan")
         self._anyone = np.ones(n, dtype=bool)
         self._vacant_steps = 0
+        self._had_prime = False
         self._vacancy_run = 0
         self._longest_vacancy = 0
         self._held: tuple[np.ndarray, np.ndarray] | None = None
@@ -436,7 +437,10 @@ class MultiTargetStrategy(ConnectivityStrategy):
             self._lambda_sum += lam
             self._lambda_count += 1
         self._max_primes = max(self._max_primes, int((pl.role == PRIME).sum()))
-        vacant = bool(not (pl.role == PRIME).any() and (pl.role == SECONDARY).any())
+        # the start-up election runs before any prime exists (Sec. 3.2): not a vacancy
+        has_prime = bool((pl.role == PRIME).any())
+        self._had_prime = self._had_prime or has_prime
+        vacant = self._had_prime and not has_prime and bool((pl.role == SECONDARY).any())
         self._vacant_steps += vacant
         self._vacancy_run = self._vacancy_run + 1 if vacant else 0
         self._longest_vacancy = max(self._longest_vacancy, self._vacancy_run)
