@@ -20,7 +20,7 @@ from tether.experiments.store import STORE_FILE, scenario_hash
 from tether.experiments.sweep import run_sweep
 
 #: columns that measure the machine, not the trial (may differ run to run)
-TIMING = {"wall_time_s", "planning_time_mean_s", "planning_time_max_s", "run_dir"}
+TIMING = {"wall_time_s", "cpu_time_s", "planning_time_mean_s", "planning_time_max_s", "run_dir"}
 
 
 def _data(steps: int = 6, sweep: dict | None = None) -> dict:

@@ -28,7 +28,7 @@ from tether.sim import RunResult, StepRecord, TeamState
 
 #: summary keys every run has; a strategy metric with one of these names gets a prefix
 CORE_KEYS = ("scenario", "strategy", "seed", "n_robots", "dim", "sim_time_s", "steps",
-             "wall_time_s")  # fmt: skip
+             "wall_time_s", "cpu_time_s")  # fmt: skip
 
 
 class TrajectoryRecorder:
@@ -113,7 +113,8 @@ def summarize(scenario: Any, seed: int, result: RunResult, wall_time_s: float) -
 
     Core keys, the same for every strategy: ``scenario``, ``strategy``,
     ``seed``, ``n_robots``, ``dim``, ``sim_time_s``, ``steps``,
-    ``wall_time_s``, ``connected_all_steps`` (the true interaction graph,
+    ``wall_time_s``, ``cpu_time_s`` (the simulation's processor time),
+    ``connected_all_steps`` (the true interaction graph,
     fixed nodes included, connected at every step), ``min_lambda2``
     (unweighted), ``min_links``, ``max_links``, ``collisions``,
     ``collision_distance_m``, ``min_distance_m`` and ``provenance``. A
@@ -130,6 +131,7 @@ def summarize(scenario: Any, seed: int, result: RunResult, wall_time_s: float) -
         "sim_time_s": result.sim_time_s,
         "steps": result.steps,
         "wall_time_s": wall_time_s,
+        "cpu_time_s": result.cpu_time_s,
         "connected_all_steps": result.connected_all_steps,
         "min_lambda2": float(np.nanmin(lam)) if np.isfinite(lam).any() else None,
         "min_links": int(min(r.n_links for r in recs)),

@@ -309,6 +309,7 @@ class RunResult:
     records: list[StepRecord]
     final_state: TeamState
     strategy_metrics: dict[str, Any] = field(default_factory=dict)
+    cpu_time_s: float = float("nan")
 
     @property
     def connected_all_steps(self) -> bool:
@@ -369,7 +370,7 @@ def _loop(
     collision_distance_m: float,
     recorder: Recorder | None,
 ) -> RunResult:
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     state = initial.copy()
     strategy.reset(world, state, rng)
     records: list[StepRecord] = []
@@ -397,6 +398,7 @@ def _loop(
         steps=step,
         sim_time_s=step * dt_s,
         wall_time_s=time.perf_counter() - start,
+        cpu_time_s=time.process_time() - cpu_start,
         records=records,
         final_state=state,
         strategy_metrics=strategy.metrics(),

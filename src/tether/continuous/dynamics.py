@@ -20,7 +20,7 @@ robot back with more energy than it had. Inside each control period ``dt`` the s
    ``f_i``). A candidate with ``h omega > stiffness_max`` is rejected and retried with
    ``h = stiffness_target / omega`` (at most halved), unless its local error is below
    ``tolerance_m``: the distance ``h^2 |f_i(q+) - f_i(q)| / (2 m)`` between the Euler step
-   and the trapezoidal one (a hundredth of ``max_step_m``). A force that jumps (a closest
+   and the trapezoidal one (a tenth of ``max_step_m``). A force that jumps (a closest
    obstacle point that switches, a saturation) has an unbounded secant however short the
    step; the error test accepts its short steps, and bounds the chatter there to
    ``tolerance_m``. This is error control, not a veto: it looks at the force, never at
@@ -56,8 +56,9 @@ Energy
 ------
 With ``E = sum m |v|^2 / 2 + V(lambda2)`` the exact solution obeys ``dE = f_ext . dq -
 B |v|^2 dt``. The residual of a sub-step, ``dE - f_ext . dq + h B |v+|^2``, is the energy
-the integrator made or lost; the positive part is summed as ``energy_added_j`` (with the
-exact eigensolver, where ``V`` is known).
+the integrator made or lost: its positive parts are summed as ``energy_added_j``, all of
+it as ``energy_net_j`` (negative: the integrator dissipated); with the exact eigensolver,
+where ``V`` is known.
 """
 
 from __future__ import annotations
@@ -139,6 +140,7 @@ class IntegrationStats:
     safe_set_exits: int = 0  # accepted sub-steps outside the safe set (detect)
     box_contacts: int = 0
     energy_added_j: float = 0.0
+    energy_net_j: float = 0.0
     speed_limit_work_j: float = 0.0
     max_speed_mps: float = 0.0
     max_accel_mps2: float = 0.0
@@ -153,7 +155,7 @@ class IntegrationStats:
         """Accumulate ``other`` (counts and energies add, extremes combine)."""
         for name in ("substeps", "rejections", "guard_interventions", "stalls",
                      "tolerance_misses", "safe_set_exits", "box_contacts", "energy_added_j",
-                     "speed_limit_work_j"):  # fmt: skip
+                     "energy_net_j", "speed_limit_work_j"):  # fmt: skip
             setattr(self, name, getattr(self, name) + getattr(other, name))
         for name in ("max_speed_mps", "max_accel_mps2"):
             setattr(self, name, max(getattr(self, name), getattr(other, name)))
@@ -354,8 +356,9 @@ def integrate(
         _, _, work, kinetic, speed, accel = terms
         if np.isfinite(lam) and np.isfinite(ev1[0]):
             residual = kinetic + system.potential(ev1[0]) - system.potential(lam) - work + diss
-            if np.isfinite(residual) and residual > 0:
-                stats.energy_added_j += residual
+            if np.isfinite(residual):
+                stats.energy_added_j += max(residual, 0.0)
+                stats.energy_net_j += residual
         stats.speed_limit_work_j += limit
         stats.max_speed_mps = max(stats.max_speed_mps, speed)
         stats.max_accel_mps2 = max(stats.max_accel_mps2, accel)

@@ -251,6 +251,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._max_primes = 0
         self._elections = 0
         self._filter_dev = 0.0
+        self._filter_peak = np.zeros(2)  # the reference's largest speed and acceleration
         self._prime_eff = float("nan")
         self._anyone = np.ones(n, dtype=bool)
         self._vacant_steps = 0
@@ -452,6 +453,8 @@ class MultiTargetStrategy(ConnectivityStrategy):
                 self.filter = ReferenceFilter(q, dt)
             dev = np.linalg.norm(self.filter.update(q_new) - q_new, axis=1)
             self._filter_dev = max(self._filter_dev, float(dev.max()))
+            speed, accel = (np.linalg.norm(self.filter.state[k], axis=1).max() for k in (1, 2))
+            self._filter_peak = np.maximum(self._filter_peak, [speed, accel])
         self._t_s = t_s
         if self._completion is None and pl.done():
             self._completion = t_s
@@ -506,4 +509,6 @@ class MultiTargetStrategy(ConnectivityStrategy):
         }
         if self.filter is not None:
             out["reference_filter_max_deviation_m"] = self._filter_dev
+            out["reference_filter_max_speed_mps"] = float(self._filter_peak[0])
+            out["reference_filter_max_accel_mps2"] = float(self._filter_peak[1])
         return out

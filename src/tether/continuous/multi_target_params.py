@@ -102,9 +102,9 @@ class MultiTargetParams(ConnectivityStrategyParams):
     )  # fmt: skip
     max_travel_force_n: float = Field(default=10.0, gt=0)
     max_anchor_force_n: float | None = Field(
-        default=None, gt=0,
-        description="saturate the anchor force of eq. (7) (None: the paper's law, unbounded "
-        "at Rz, so the ball is a barrier)",
+        default=10.0, gt=0,
+        description="the anchor force of eq. (7) saturates here (null: the paper's law, "
+        "unbounded at Rz, so the ball is a barrier)",
     )  # fmt: skip
     election_criterion: Literal["path_length", "distance"] = "path_length"
     messages: MessagesConfig = Field(default_factory=MessagesConfig)

@@ -287,6 +287,7 @@ class ConnectivityStrategy(Strategy):
             "speed_bound_mps": self.integ.robot.max_speed_mps,
             "max_accel_mps2": r.max_accel_mps2,
             "energy_added_j": r.energy_added_j,
+            "energy_net_j": r.energy_net_j,
             "speed_limit_work_j": r.speed_limit_work_j,
             "box_contacts": r.box_contacts,
             "eigensolver": self.params.eigensolver,

@@ -149,7 +149,7 @@ class ConnectivityStrategyParams(_Strict):
         return IntegratorParams(
             robot=self.robot(),
             max_step_m=self.max_step_fraction * width,
-            tolerance_m=0.01 * self.max_step_fraction * width,
+            tolerance_m=0.1 * self.max_step_fraction * width,
             guard=self.guard,
             keep_fraction=self.keep_fraction,
         )

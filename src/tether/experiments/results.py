@@ -24,7 +24,7 @@ __all__ = ["SweepResults", "load_results", "step_series"]
 #: columns that are not results of a trial (ids, bookkeeping) or measure the machine
 NOT_METRICS = {
     "trial_id", "status", "seed", "error", "run_dir", "scenario", "strategy",
-    "wall_time_s", "planning_time_mean_s", "planning_time_max_s",
+    "wall_time_s", "cpu_time_s", "planning_time_mean_s", "planning_time_max_s",
 }  # fmt: skip
 #: per-step columns that are not metrics (the clock)
 STEP_CLOCK = ("step", "t_s")
