@@ -35,7 +35,14 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("motion", ("tether.paths", "tether.motion")),
     (
         "core",
-        ("tether.sim", "tether.record", "tether.team", "tether.viz.plots", "tether.viz.style"),
+        (
+            "tether.sim",
+            "tether.record",
+            "tether.targets_recorded",
+            "tether.team",
+            "tether.viz.plots",
+            "tether.viz.style",
+        ),
     ),
     ("strategies", ("tether.silent", "tether.continuous", "tether.recurrent")),
     ("running", ("tether.runner", "tether.plugins")),

@@ -225,6 +225,9 @@ class MultiTargetStrategy(ConnectivityStrategy):
     # -- lifecycle ---------------------------------------------------------------------
     def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
         super().reset(world, state, rng)
+        for robot, queue in enumerate(self.targets.queues):  # the run folder keeps them
+            for z in queue:
+                self._record_target(robot, z)
         p, n = self.params, state.n
         comm = CommParams(p.messages.loss_probability, p.messages.delay_rounds)
         self.election = Election(n, MessageLayer(n, comm, rng))
@@ -420,8 +423,13 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     def add_target(self, robot: int, position_m: Any, stay_s: float = 3.0, **kw: Any) -> None:
         """Give ``robot`` one more target while the team runs (Python API)."""
-        self.targets.add(robot, position_m, stay_s, **kw)
+        self._record_target(robot, self.targets.add(robot, position_m, stay_s, **kw))
         self._completion = None
+
+    def _record_target(self, robot: int, z: Any) -> None:
+        """A ``target_added`` event (:mod:`tether.targets_recorded`) for target ``z``."""
+        self.emit("target_added", robot, target=z.id, position_m=[float(v) for v in z.position_m],
+                  stay_s=z.stay_s, appear_s=z.appear_s)  # fmt: skip
 
     def done(self) -> bool:
         return self._completion is not None

@@ -325,6 +325,7 @@ def legend_handles(
     base_station: bool = False,
     exploration: bool = False,
     targets: bool = False,
+    targets_finished: bool = False,
     path: bool = False,
     links: bool = True,
     unknown: bool = False,
@@ -364,6 +365,8 @@ def legend_handles(
         out.append(dot(BASE_STATION, "base station", marker="s", size=9))
     if targets:
         out.append(dot(TARGET, "target", marker="*", size=11))
+    if targets_finished:
+        out.append(dot("none", "target, reached or dropped", marker="*", size=11))
     if path:
         out.append(Line2D([], [], color=PATH, lw=1.5, ls="--", label=path_label))
     if trail:
