@@ -27,6 +27,11 @@ err = Console(stderr=True)
 
 DEFAULT_SCENARIO = "silent_demo"
 
+
+def say(message: str) -> None:
+    """One line of output as written: no markup, no colouring, never wrapped to the terminal."""
+    out.print(message, markup=False, highlight=False, soft_wrap=True)
+
 ScenarioArg = Annotated[
     str, typer.Argument(help="Scenario YAML file, or the name of a built-in scenario.")
 ]
@@ -251,7 +256,7 @@ def animate(
         duration_s=duration,
         stride=stride,
         width_px=width,
-        say=out.print,
+        say=say,
     )
 
 
@@ -268,7 +273,7 @@ def view(
     """Write a self-contained, offline HTML 3-D replay of a run folder."""
     from tether.viz.commands import view_command
 
-    view_command(run_dir, out_file, max_mb=max_mb, serve=serve, port=port, say=out.print)
+    view_command(run_dir, out_file, max_mb=max_mb, serve=serve, port=port, say=say)
 
 
 @app.command("export")
@@ -280,7 +285,7 @@ def export_(
     """Export a run folder as ROS 2 messages (Foxglove, RViz, ros2 bag play)."""
     from tether.viz.commands import export_command
 
-    export_command(run_dir, out_path, fmt=fmt, say=out.print)
+    export_command(run_dir, out_path, fmt=fmt, say=say)
 
 
 def _usage_error_class() -> type[Exception]:
