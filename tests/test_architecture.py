@@ -23,6 +23,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         (
             "tether",
             "tether.errors",
+            "tether.interrupts",
             "tether.registry",
             "tether.geometry",
             "tether.floats",

@@ -7,7 +7,10 @@ printed as one line (file, field, fix) with exit code 2, never a traceback.
 from __future__ import annotations
 
 import os
+import signal
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
@@ -16,6 +19,7 @@ from rich.console import Console
 
 from tether.config import MAX_SEED
 from tether.errors import TetherError
+from tether.interrupts import Stopped, stop_on_signals
 
 app = typer.Typer(
     add_completion=False,
@@ -31,6 +35,17 @@ DEFAULT_SCENARIO = "silent_demo"
 def say(message: str) -> None:
     """One line of output as written: no markup, no colouring, never wrapped to the terminal."""
     out.print(message, markup=False, highlight=False, soft_wrap=True)
+
+
+@contextmanager
+def noting(note: str) -> Iterator[None]:
+    """Tell the user, if the block is stopped (Ctrl-C, SIGTERM), what the stop left behind."""
+    try:
+        yield
+    except Stopped as exc:
+        exc.note = note
+        raise
+
 
 ScenarioArg = Annotated[
     str, typer.Argument(help="Scenario YAML file, or the name of a built-in scenario.")
@@ -83,7 +98,10 @@ def run(
         markup=False,
         highlight=False,
     )
-    outcome = run_scenario(sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None)
+    with noting("no run folder was written"):
+        outcome = run_scenario(
+            sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None
+        )
     s = outcome.summary
     keys = [
         "steps",
@@ -154,17 +172,17 @@ def sweep(
     sc = _load(scenario, set_, quick)
     if out_dir is None:
         out_dir = Path(DEFAULT_SWEEP_DIR + (QUICK_SUFFIX if quick else ""))
-    result = run_sweep(
-        sc,
-        out_dir,
-        seeds=seeds,
-        executor=executor,
-        workers=workers,
-        address=address,
-        progress=progress_for(
-            out, lambda m: out.print(m, markup=False, highlight=False, soft_wrap=True)
-        ),
-    )
+    resume = f"finished trials are kept in {out_dir}; the same command resumes the sweep"
+    with noting(resume):
+        result = run_sweep(
+            sc,
+            out_dir,
+            seeds=seeds,
+            executor=executor,
+            workers=workers,
+            address=address,
+            progress=progress_for(out, say),
+        )
     out.print(
         f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}",
         markup=False,
@@ -316,10 +334,17 @@ def main(argv: list[str] | None = None) -> None:
 
     Exit codes: 0 success, 2 bad input (one ``error:`` line naming the file or
     option, the field and the fix; usage errors too), 1 an internal error (one
-    line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted.
+    line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted by
+    Ctrl-C and 143 by SIGTERM (one line; a run folder being written is removed).
     """
     try:
-        app(args=argv, prog_name="tether", standalone_mode=False)
+        with stop_on_signals():
+            code = app(args=argv, prog_name="tether", standalone_mode=False)
+        if isinstance(code, int) and code == 130:  # typer's KeyboardInterrupt, no handler
+            raise Stopped(signal.SIGINT)
+    except Stopped as exc:  # Ctrl-C or SIGTERM: what the command was doing is undone
+        err.print(str(exc), highlight=False, markup=False, soft_wrap=True)
+        sys.exit(exc.code)
     except TetherError as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)
@@ -327,7 +352,7 @@ def main(argv: list[str] | None = None) -> None:
         code = getattr(exc, "exit_code", getattr(exc, "code", 0))
         sys.exit(code or 0)
     except (typer.Abort, KeyboardInterrupt):
-        err.print("aborted", highlight=False, markup=False)
+        err.print(str(Stopped(signal.SIGINT)), highlight=False, markup=False)
         sys.exit(130)
     except Exception as exc:  # usage errors, and anything unexpected
         if isinstance(exc, _usage_error_class()):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from contextlib import closing, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -109,15 +110,19 @@ def run_trials(
     if reporter is not None:
         reporter.start(len(todo), len(trials) - len(todo))
     try:
-        for outcome in execute(todo, executor, workers=workers, address=address):
-            run_dir = outcome.trial.run_dir
-            if outcome.summary is None:
-                errors.append(f"{run_dir} (seed {outcome.trial.seed}): {outcome.error}")
-                failures[run_dir] = outcome
-            else:
-                summaries[run_dir] = outcome.summary
-            if reporter is not None:
-                reporter.advance(outcome, len(summaries) - (len(trials) - len(todo)), len(errors))
+        outcomes = execute(todo, executor, workers=workers, address=address)
+        stop = closing(outcomes) if hasattr(outcomes, "close") else nullcontext()
+        with stop:  # an interrupt stops the executor's workers at once
+            for outcome in outcomes:
+                run_dir = outcome.trial.run_dir
+                if outcome.summary is None:
+                    errors.append(f"{run_dir} (seed {outcome.trial.seed}): {outcome.error}")
+                    failures[run_dir] = outcome
+                else:
+                    summaries[run_dir] = outcome.summary
+                if reporter is not None:
+                    done = len(summaries) - (len(trials) - len(todo))
+                    reporter.advance(outcome, done, len(errors))
     finally:
         if reporter is not None:
             reporter.stop()
