@@ -24,6 +24,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "tether",
             "tether.errors",
             "tether.interrupts",
+            "tether.progress",
             "tether.registry",
             "tether.geometry",
             "tether.floats",

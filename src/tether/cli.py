@@ -56,6 +56,9 @@ SetOpt = Annotated[
 ]
 
 
+QuietOpt = Annotated[
+    bool, typer.Option("--quiet", "-q", help="No progress bar (or progress lines).")
+]
 QuickOpt = Annotated[
     bool,
     typer.Option(
@@ -85,11 +88,13 @@ def run(
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
     animate_: Annotated[bool, typer.Option("--animate", help="Then `tether animate` it.")] = False,
     view_: Annotated[bool, typer.Option("--view", help="Then `tether view` it.")] = False,
+    quiet: QuietOpt = False,
 ) -> None:
     """Run one scenario and write its run folder (scenario, Parquet records, summary, figures).
 
     Example: tether run scenarios/silent_paper.yaml --set strategy.params.d0_m=5
     """
+    from tether.progress import StepProgress
     from tether.runner import run as run_scenario
 
     sc = _load(scenario, set_)
@@ -98,10 +103,14 @@ def run(
         markup=False,
         highlight=False,
     )
-    with noting("no run folder was written"):
-        outcome = run_scenario(
-            sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None
-        )
+    steps = None if quiet else StepProgress(out, say, sc.sim.max_steps)
+    try:
+        with noting("no run folder was written"):
+            outcome = run_scenario(sc, out_dir=out_dir, seed=seed, progress=steps,
+                                   figures=False if no_figures else None)  # fmt: skip
+    finally:
+        if steps is not None:
+            steps.stop()
     s = outcome.summary
     keys = [
         "steps",
@@ -157,6 +166,7 @@ def sweep(
     ] = None,
     set_: SetOpt = None,
     quick: QuickOpt = False,
+    quiet: QuietOpt = False,
 ) -> None:
     """Run the scenario's `sweep:` combinations x seeds (resumable) into one table of trials.
 
@@ -181,7 +191,7 @@ def sweep(
             executor=executor,
             workers=workers,
             address=address,
-            progress=progress_for(out, say),
+            progress=None if quiet else progress_for(out, say),
         )
     out.print(
         f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}",

@@ -13,6 +13,7 @@ import copy
 import datetime as dt
 import inspect
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -395,12 +396,14 @@ def run(
     out_dir: str | Path | None = None,
     seed: int | None = None,
     figures: bool | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> RunOutcome:
     """Run one scenario and write its run folder; returns the folder and the summary.
 
     The folder is committed as a whole (:class:`tether.runfolder.RunFolder`):
     ``summary.json`` is written last, and the folder appears at ``out_dir``
-    only when the run and its figures are complete.
+    only when the run and its figures are complete. ``progress`` is called with
+    each step number as the run goes (``tether run``'s progress bar).
     """
     scenario = as_scenario(scenario)
     seed = check_seed(seed)
@@ -417,7 +420,7 @@ def run(
     path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
     folder = RunFolder(path)
     try:
-        recorder = TrajectoryRecorder(every=scenario.output.record_every)
+        recorder = TrajectoryRecorder(every=scenario.output.record_every, on_step=progress)
         start = time.perf_counter()
         result = simulate(
             built.world,
@@ -486,14 +489,5 @@ def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Any]:
     return figs
 
 
-__all__ = [
-    "Built",
-    "RunOutcome",
-    "TetherError",
-    "as_scenario",
-    "build",
-    "build_world",
-    "check_seed",
-    "run",
-    "run_figures",
-]
+__all__ = ["Built", "RunOutcome", "TetherError", "as_scenario", "build", "build_world",
+           "check_seed", "run", "run_figures"]  # fmt: skip

@@ -26,6 +26,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from PIL import Image  # noqa: E402
 
 from tether.errors import TetherError  # noqa: E402
+from tether.progress import progress_bar  # noqa: E402
 from tether.targets_recorded import FINISHED, HIDDEN  # noqa: E402
 from tether.viz import style  # noqa: E402
 from tether.viz.known import first_seen  # noqa: E402
@@ -288,11 +289,8 @@ def _frames(painter: _Painter, shown: np.ndarray, progress: bool) -> Iterator[np
         for k in shown:
             yield painter.draw(int(k), shown)
         return
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
-
-    columns = ("{task.description}", BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, transient=True) as bar:
-        task = bar.add_task("drawing frames", total=len(shown))
+    with progress_bar("drawing frames") as bar:
+        task = bar.add_task("animate", total=len(shown))
         for k in shown:
             yield painter.draw(int(k), shown)
             bar.advance(task)

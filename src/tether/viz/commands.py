@@ -76,14 +76,12 @@ def view_command(
 
 
 def export_command(run_dir: Path, out: Path | None, *, fmt: str, say: Any) -> Path:
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
-
     from tether.export.ros2 import export
+    from tether.progress import progress_bar
 
     run = load_run(run_dir)
-    columns = ("{task.description}", BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, transient=True) as bar:
-        task = bar.add_task("writing steps", total=run.n_frames)
+    with progress_bar("writing steps") as bar:
+        task = bar.add_task("export", total=run.n_frames)
         result = export(run, out, fmt=fmt, progress=lambda k: bar.advance(task, k))
     total = sum(result.messages.values())
     say(
