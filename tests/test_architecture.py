@@ -42,14 +42,13 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "tether.record",
             "tether.targets_recorded",
             "tether.team",
-            "tether.viz.plots",
-            "tether.viz.style",
+            "tether.viz",
         ),
     ),
     ("strategies", ("tether.silent", "tether.continuous", "tether.recurrent")),
     ("running", ("tether.runner", "tether.plugins")),
     ("experiments", ("tether.experiments", "tether.recurrent.report")),
-    ("interfaces", ("tether.cli", "tether.viz", "tether.export", "tether.viewer")),
+    ("interfaces", ("tether.cli", "tether.viewing", "tether.export")),
 ]
 
 

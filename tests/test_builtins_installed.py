@@ -79,3 +79,15 @@ def test_builtin_runs_by_name_from_an_empty_folder(name, installed, tmp_path) ->
     assert "results: r" in done.stdout
     assert (cwd / "r" / "summary.json").is_file()
     assert sorted(p.name for p in cwd.iterdir()) == ["r"]
+
+
+def test_installed_package_animates_and_views(installed, tmp_path) -> None:
+    """The replay's page, scripts and three.js ship with the package (package data)."""
+    done = subprocess.run(
+        ["tether", "run", "silent_demo", "--set", "sim.max_steps=3", "--no-figures",
+         "--out", "r", "--animate", "--view"],
+        env=installed, cwd=tmp_path, capture_output=True, text=True, timeout=TIMEOUT_S,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    page = (tmp_path / "r" / "replay.html").read_text()
+    assert "three" in page.lower() and (tmp_path / "r" / "animation.gif").stat().st_size > 0

@@ -33,7 +33,7 @@ from tether.config import builtin_scenarios, load_scenario
 from tether.plugins import load_builtins
 from tether.registry import STRATEGIES
 from tether.targets_recorded import HIDDEN
-from tether.viz.runfolder import load_run
+from tether.viewing.runfolder import load_run
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "custom_strategy.py"

@@ -16,7 +16,7 @@ import pytest
 from tether.config import scenario_from_dict
 from tether.runner import run
 from tether.targets_recorded import FINISHED, HIDDEN, OPEN, recorded_targets
-from tether.viz.runfolder import load_run
+from tether.viewing.runfolder import load_run
 
 TARGETS = [  # robot, position, appears at (s)
     (0, [13.0, 10.0, 4.0], 0.0),
@@ -87,7 +87,7 @@ def test_target_states_follow_appearance_and_arrival(run_dir: Path) -> None:
 
 
 def test_the_animation_draws_only_the_targets_shown_at_each_frame(run_dir: Path) -> None:
-    from tether.viz.animate import _Painter
+    from tether.viewing.animate import _Painter
 
     data = load_run(run_dir)
     painter = _Painter(data, 6.0, 60)

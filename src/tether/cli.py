@@ -274,7 +274,7 @@ def animate(
     width: Annotated[int, typer.Option(min=64, max=8192, help="Width in pixels.")] = 720,
 ) -> None:
     """Animate a run folder (GIF, or MP4 where ffmpeg exists), e.g. tether animate runs/x"""
-    from tether.viz.commands import animate_command
+    from tether.viewing.commands import animate_command
 
     animate_command(
         run_dir,
@@ -299,7 +299,7 @@ def view(
     ] = 8000,
 ) -> None:
     """Write a self-contained, offline HTML 3-D replay of a run folder."""
-    from tether.viz.commands import view_command
+    from tether.viewing.commands import view_command
 
     view_command(run_dir, out_file, max_mb=max_mb, serve=serve, port=port, say=say)
 
@@ -311,7 +311,7 @@ def export_(
     out_path: Annotated[Path | None, typer.Option("--out", "-o", help="File or folder.")] = None,
 ) -> None:
     """Export a run folder as ROS 2 messages (Foxglove, RViz, ros2 bag play)."""
-    from tether.viz.commands import export_command
+    from tether.viewing.commands import export_command
 
     export_command(run_dir, out_path, fmt=fmt, say=say)
 

@@ -1,6 +1,6 @@
 """One look for every figure, animation and replay of tether.
 
-Colours are given once here and used by matplotlib (:mod:`tether.viz.animate`,
+Colours are given once here and used by matplotlib (:mod:`tether.viewing.animate`,
 figures), by the browser replay (:func:`palette` is embedded in the page) and by
 the ROS 2 export (marker colours), so a leader, a base station or a link about
 to break looks the same everywhere:

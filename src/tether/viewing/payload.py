@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
+from tether.viewing.known import NEVER, first_seen
+from tether.viewing.runfolder import RunData, frame_indices
 from tether.viz import style
 from tether.viz.boxes import coarsen, obstacle_boxes
-from tether.viz.known import NEVER, first_seen
-from tether.viz.runfolder import RunData, frame_indices
 
 MISSING = 65535
 MAX_SERIES_POINTS = 20_000

@@ -28,9 +28,9 @@ from PIL import Image  # noqa: E402
 from tether.errors import TetherError  # noqa: E402
 from tether.progress import progress_bar  # noqa: E402
 from tether.targets_recorded import FINISHED, HIDDEN  # noqa: E402
+from tether.viewing.known import first_seen  # noqa: E402
+from tether.viewing.runfolder import RunData, frame_indices, load_run  # noqa: E402
 from tether.viz import style  # noqa: E402
-from tether.viz.known import first_seen  # noqa: E402
-from tether.viz.runfolder import RunData, frame_indices, load_run  # noqa: E402
 
 DEFAULT_FPS = 10.0
 DEFAULT_DURATION_S = 20.0

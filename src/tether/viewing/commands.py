@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tether.viz.runfolder import load_run
+from tether.viewing.runfolder import load_run
 
 
 def _mb(n_bytes: int) -> str:
@@ -25,7 +25,7 @@ def animate_command(
     say: Any,
     progress: bool = True,
 ) -> Path:
-    from tether.viz.animate import animate
+    from tether.viewing.animate import animate
 
     result = animate(
         run_dir,
@@ -55,8 +55,8 @@ def view_command(
     say: Any,
 ) -> Path:
     from tether.errors import TetherError
-    from tether.viz.replay import serve as serve_file
-    from tether.viz.replay import write_replay
+    from tether.viewing.replay import serve as serve_file
+    from tether.viewing.replay import write_replay
 
     if max_mb <= 0:
         raise TetherError(f"--max-mb: must be positive (got {max_mb})")
