@@ -25,6 +25,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "tether.errors",
             "tether.interrupts",
             "tether.progress",
+            "tether.suggest",
             "tether.registry",
             "tether.geometry",
             "tether.floats",
@@ -48,7 +49,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("strategies", ("tether.silent", "tether.continuous", "tether.recurrent")),
     ("running", ("tether.runner", "tether.plugins")),
     ("experiments", ("tether.experiments", "tether.recurrent.report")),
-    ("interfaces", ("tether.cli", "tether.viewing", "tether.export")),
+    (
+        "interfaces",
+        ("tether.cli", "tether.__main__", "tether.terminal", "tether.viewing", "tether.export"),
+    ),
 ]
 
 

@@ -8,6 +8,7 @@ by name in an empty temporary folder, as a user would after ``pip install .``.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -45,11 +46,16 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     work = tmp_path_factory.mktemp("install")
     source = work / "source"
     source.mkdir()
-    for name in ("pyproject.toml", "README.md", "LICENSE"):
+    for name in ("pyproject.toml", "setup.py", "README.md", "LICENSE"):
         if (ROOT / name).exists():
             shutil.copy(ROOT / name, source / name)
     shutil.copytree(ROOT / "src", source / "src",
                     ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))  # fmt: skip
+    git = ["git", "-c", "user.name=tether", "-c", "user.email=tether@example.org"]
+    for args in (["init", "-q"], ["add", "-A"], ["commit", "-q", "-m", "source"]):
+        subprocess.run([*git, *args], cwd=source, check=True, capture_output=True, timeout=60)
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=source, capture_output=True,
+                            text=True, check=True).stdout.strip()  # fmt: skip
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
     wheels, site = work / "wheels", work / "site"
     subprocess.run([*pip, "wheel", "--no-deps", "-w", str(wheels), str(source)],
@@ -64,6 +70,8 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
         env=env, cwd=work, capture_output=True, text=True, check=True,
     )  # fmt: skip
     assert Path(where.stdout.strip()).is_relative_to(site), where.stdout
+    env["TETHER_BUILT_FROM"] = commit  # for the provenance tests below, not read by tether
+    env["TETHER_SITE"] = str(site)
     return env
 
 
@@ -91,3 +99,28 @@ def test_installed_package_animates_and_views(installed, tmp_path) -> None:
     assert done.returncode == 0, done.stderr
     page = (tmp_path / "r" / "replay.html").read_text()
     assert "three" in page.lower() and (tmp_path / "r" / "animation.gif").stat().st_size > 0
+
+
+def test_installed_runs_record_the_commit_they_were_built_from(installed, tmp_path) -> None:
+    done = subprocess.run(
+        ["tether", "run", "silent_demo", "--set", "sim.max_steps=2", "--no-figures", "--out", "r"],
+        env=installed, cwd=tmp_path, capture_output=True, text=True, timeout=TIMEOUT_S,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["provenance"]["git_hash"] == installed["TETHER_BUILT_FROM"]
+
+
+def test_a_project_repository_around_the_install_is_not_its_source(installed, tmp_path) -> None:
+    """tether installed in a virtual environment inside the user's own git repository."""
+    project = tmp_path / "project"
+    shutil.copytree(installed["TETHER_SITE"], project / "venv" / "site")
+    (project / "notes.txt").write_text("the user's work")
+    git = ["git", "-c", "user.name=u", "-c", "user.email=u@example.org"]
+    for args in (["init", "-q"], ["add", "notes.txt"], ["commit", "-q", "-m", "mine"]):
+        subprocess.run([*git, *args], cwd=project, check=True, capture_output=True, timeout=60)
+    env = dict(installed, PYTHONPATH=str(project / "venv" / "site"))
+    got = subprocess.run([sys.executable, "-c", "from tether.runfolder import git_hash; "
+                          "print(git_hash())"], env=env, cwd=project, capture_output=True,
+                         text=True, check=True, timeout=TIMEOUT_S)  # fmt: skip
+    assert got.stdout.strip() == installed["TETHER_BUILT_FROM"]

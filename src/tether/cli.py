@@ -20,11 +20,14 @@ from rich.console import Console
 from tether.config import MAX_SEED
 from tether.errors import TetherError
 from tether.interrupts import Stopped, stop_on_signals
+from tether.terminal.help import flow, summary
+from tether.terminal.words import count
 
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=False,
     help="tether: multi-robot teams that stay connected. Run `tether run` for a demo.",
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
 out = Console()
 err = Console(stderr=True)
@@ -45,6 +48,31 @@ def noting(note: str) -> Iterator[None]:
     except Stopped as exc:
         exc.note = note
         raise
+
+
+def _version(value: bool) -> None:
+    if value:
+        from tether import __version__
+        from tether.runfolder import git_hash
+
+        say(f"tether {__version__} (commit {git_hash()})")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """tether: multi-robot teams that stay connected. Run `tether run` for a demo."""
+
+
+def _seed(value: int | None) -> int | None:
+    if value is not None and not 0 <= value <= MAX_SEED:
+        raise typer.BadParameter("must be an integer from 0 to 2**63 - 1")
+    return value
 
 
 ScenarioArg = Annotated[
@@ -82,7 +110,7 @@ def run(
         Path | None, typer.Option("--out", "-o", help="Run folder (default: runs/<name>-...)")
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(min=0, max=MAX_SEED, help="Override the scenario's seed.")
+        int | None, typer.Option(callback=_seed, help="Override the scenario's seed (0 or more).")
     ] = None,
     set_: SetOpt = None,
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
@@ -96,13 +124,11 @@ def run(
     """
     from tether.progress import StepProgress
     from tether.runner import run as run_scenario
+    from tether.runner import strategy_class
+    from tether.terminal.notes import run_notes
 
     sc = _load(scenario, set_)
-    out.print(
-        f"running {sc.name} ({sc.strategy.name}, {sc.team.n_robots} robots) ...",
-        markup=False,
-        highlight=False,
-    )
+    say(f"running {sc.name} ({sc.strategy.name}, {count(sc.team.n_robots, 'robot')}) ...")
     steps = None if quiet else StepProgress(out, say, sc.sim.max_steps)
     try:
         with noting("no run folder was written"):
@@ -130,11 +156,12 @@ def run(
         "rejected_substeps",
     ]
     for k in keys:
-        if k in s:
+        if s.get(k) is not None:  # None: not measured in this run (no obstacles, ...)
             v = s[k]
-            line = f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}"
-            out.print(line, markup=False, highlight=False)
-    out.print(f"results: {outcome.path}", markup=False, highlight=False, soft_wrap=True)
+            say(f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}")
+    for note in run_notes(outcome.path, s, sc, strategy_class(sc)):
+        say(f"note: {note}")
+    say(f"results: {outcome.path}")
     if animate_:
         animate(outcome.path)
     if view_:
@@ -237,27 +264,20 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
         check_sweep(small, strategy_class(small))
     check_writable(sc.output.dir)  # where `tether run` would write (without --out)
     size = ", quick size" if quick else ""
-    swept = f", sweep of {n_combos} combinations{size}" if n_combos else size
-    out.print(
-        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept})",
-        markup=False,
-        highlight=False,
-    )
+    swept = f", sweep of {count(n_combos, 'combination')}{size}" if n_combos else size
+    say(f"{scenario}: ok ({sc.strategy.name}, {count(sc.team.n_robots, 'robot')}{swept})")
 
 
 @app.command("list")
 def list_() -> None:
-    """List built-in scenarios, strategies and scenes."""
-    from tether.config import builtin_scenarios, paper_campaigns
-    from tether.plugins import load_builtins
+    """List the built-in scenarios, campaigns, strategies, scenes and link models.
 
-    names = load_builtins()
-    out.print("scenarios:   " + ", ".join(builtin_scenarios()), markup=False)
-    out.print("campaigns:   " + ", ".join(paper_campaigns()) + "  (tether sweep NAME [--quick])",
-              markup=False)  # fmt: skip
-    out.print("strategies:  " + ", ".join(names["strategies"]), markup=False)
-    out.print("scenes:      " + ", ".join(names["scenes"]), markup=False)
-    out.print("link models: " + ", ".join(names["link models"]), markup=False)
+    Each with what it is, and where its name goes (a command or a scenario key).
+    """
+    from tether.terminal.listing import listing_lines
+
+    for line in listing_lines():
+        say(line)
 
 
 RunDirArg = Annotated[Path, typer.Argument(help="A run folder written by `tether run`.")]
@@ -273,7 +293,10 @@ def animate(
     stride: Annotated[int | None, typer.Option(min=1, help="Every N-th recorded step.")] = None,
     width: Annotated[int, typer.Option(min=64, max=8192, help="Width in pixels.")] = 720,
 ) -> None:
-    """Animate a run folder (GIF, or MP4 where ffmpeg exists), e.g. tether animate runs/x"""
+    """Animate a run folder as a GIF (or an MP4 where ffmpeg exists).
+
+    Example: tether animate runs/silent_demo --fps 20 --format mp4
+    """
     from tether.viewing.commands import animate_command
 
     animate_command(
@@ -347,9 +370,10 @@ def main(argv: list[str] | None = None) -> None:
     line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted by
     Ctrl-C and 143 by SIGTERM (one line; a run folder being written is removed).
     """
+    args = sys.argv[1:] if argv is None else list(argv)
     try:
         with stop_on_signals():
-            code = app(args=argv, prog_name="tether", standalone_mode=False)
+            code = app(args=args or ["--help"], prog_name="tether", standalone_mode=False)
         if isinstance(code, int) and code == 130:  # typer's KeyboardInterrupt, no handler
             raise Stopped(signal.SIGINT)
     except Stopped as exc:  # Ctrl-C or SIGTERM: what the command was doing is undone
@@ -385,6 +409,10 @@ def main(argv: list[str] | None = None) -> None:
         )
         sys.exit(1)
 
+
+for _command in app.registered_commands:  # help paragraphs flow to the terminal's width
+    _command.help = flow(_command.callback.__doc__)
+    _command.short_help = summary(_command.callback.__doc__)
 
 if __name__ == "__main__":
     main()

@@ -40,6 +40,7 @@ from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
 from tether.sensing import SensorModel, sensed_pairs
 from tether.sim import Strategy, TeamState, simulate
+from tether.suggest import did_you_mean
 from tether.sweepspec import canonical, value_key
 from tether.team import initial_positions
 from tether.viz.plots import link_range_m, links_over_time, team_snapshot
@@ -83,7 +84,8 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
     src, cfg = scenario.source, scenario.world
     if cfg.scene not in SCENES:
         raise ScenarioError(
-            f"{src}: world.scene: unknown scene {cfg.scene!r}; expected one of: "
+            f"{src}: world.scene: unknown scene {cfg.scene!r}"
+            f"{did_you_mean(cfg.scene, SCENES.names())}; expected one of: "
             f"{', '.join(SCENES.names())}"
         )
     params = dict(cfg.params)
@@ -144,7 +146,8 @@ def strategy_class(scenario: Scenario) -> type[Strategy]:
     name = scenario.strategy.name
     if name not in STRATEGIES:
         raise ScenarioError(
-            f"{scenario.source}: strategy.name: unknown strategy {name!r}; expected one of: "
+            f"{scenario.source}: strategy.name: unknown strategy {name!r}"
+            f"{did_you_mean(name, STRATEGIES.names())}; expected one of: "
             f"{', '.join(STRATEGIES.names())}"
         )
     return STRATEGIES.get(name)
@@ -155,7 +158,7 @@ def strategy_params(scenario: Scenario, cls: type) -> Any:
         return cls.Params.model_validate(scenario.strategy.params)
     except ValidationError as exc:
         raise ScenarioError(
-            format_validation_error(scenario.source, exc, prefix="strategy.params")
+            format_validation_error(scenario.source, exc, "strategy.params", cls.Params)
         ) from None
 
 

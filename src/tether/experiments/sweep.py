@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 
-from tether.config import Scenario, sweep_label
+from tether.config import Scenario, sweep_label, sweep_spec
 from tether.errors import OutputError, TetherError
 from tether.experiments.executors import Trial, TrialOutcome, check_executor, execute
 from tether.experiments.plan import check_combinations, trial_id, trial_scenario, trials_of
@@ -191,7 +191,8 @@ def run_sweep(
     finished = [r for r in rows if r["status"] == "done"]
     try:
         table = write_rows(out / SWEEP_TABLE, rows)
-        drawn = sweep_figures(finished, scenario.team.n_robots, scenario.name)
+        followers = sweep_spec(scenario).followers()
+        drawn = sweep_figures(finished, scenario.team.n_robots, scenario.name, followers)
         figures = [save_figure(fig, out / "figures" / name) for fig, name in drawn]
     except OSError as exc:
         raise OutputError(f"{out}: cannot write the sweep table ({exc.strerror or exc})") from None
@@ -214,12 +215,17 @@ _SWEEP_FIGURES = {
 
 
 def sweep_figures(
-    rows: list[dict[str, Any]], n_robots: int, name: str | None = None
+    rows: list[dict[str, Any]],
+    n_robots: int,
+    name: str | None = None,
+    followers: set[str] | frozenset[str] = frozenset(),
 ) -> list[tuple[Any, str]]:
     """Per-step metrics of the first seed of each combination, one line per combination.
 
     Links over time (the silent paper's Fig. 5) and, where runs record it, the
     explored area (exploration strategies), in the one look of :mod:`tether.viz.plots`.
+    A combination is labelled by its axes less ``followers`` (zipped axes named by
+    their group's first axis).
     """
     files = [Path(r["run_dir"]) / "steps.parquet" for r in rows]
     files = [f for f in files if f.exists()]
@@ -233,7 +239,8 @@ def sweep_figures(
             continue
         series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for row in rows:
-            label = sweep_label({k[6:]: v for k, v in row.items() if k.startswith("param:")})
+            label = sweep_label({k[6:]: v for k, v in row.items()
+                                 if k.startswith("param:") and k[6:] not in followers})  # fmt: skip
             steps_file = Path(row["run_dir"]) / "steps.parquet"
             if label in series or not steps_file.exists():
                 continue

@@ -110,6 +110,9 @@ class _Painter:
             cb = self.fig.colorbar(self.map_img, cax=cax)
             cb.set_label("obstacle height (m)", fontsize=8)
             cb.ax.tick_params(labelsize=7)
+        if len(run.link_pairs):  # beside the height bar, if there is one
+            left = 0.55 if run.grid is not None and run.grid.dim == 3 else 0.0
+            style.link_margin_colourbar(self.fig, cax=legend_ax.inset_axes((left, 0.06, 0.12, 0.3)))
         ax.set_xlim(box[0, 0], box[1, 0])
         ax.set_ylim(box[0, 1], box[1, 1])
         overlays = []  # drawn with the moving artists, in z order, over a changing map

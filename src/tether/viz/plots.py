@@ -85,7 +85,7 @@ def series_over_time(
     ax.set_facecolor(style.BACKGROUND)
     if title:
         ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8)
+    style.place_legend(ax)
     return fig
 
 
@@ -338,6 +338,9 @@ def snapshot(
         cb = fig.colorbar(img, ax=[t for t, _ in tops], fraction=0.04, pad=0.01, shrink=0.7)
         cb.set_label("obstacle height (m)")
     any_links = any(len(np.asarray(lk).reshape(-1, 2)) for lk in links)
+    if any_links and range_m is not None:
+        style.link_margin_colourbar(fig, ax=[t for t, _ in tops], fraction=0.03, pad=0.01,
+                                    shrink=0.6)  # fmt: skip
     handles = style.legend_handles(
         roles=role_map,
         leader=leader is not None,
