@@ -129,3 +129,29 @@ def test_sweep_stops_workers_keeps_finished_trials(tmp_path, signum, code, name)
     assert quick.is_file(), "the finished trial was lost"
     runs = {p.parent for p in sweep_dir.rglob("scenario.yaml")}
     assert runs == {quick.parent}, "a trial folder without its summary was left behind"
+
+
+def test_ctrl_c_ends_view_serve_normally(tmp_path) -> None:
+    """Serving a replay lasts until Ctrl-C: that is its normal end (exit 0)."""
+    import socket
+    import urllib.request
+
+    from _viewing_helpers import make_run_folder
+
+    make_run_folder(tmp_path / "run", n_steps=5)
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    proc = _start(["view", "run", "--serve", "--port", str(port)], tmp_path)
+
+    def serving() -> bool:  # answered by the serving thread, not just a bound socket
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=5) as reply:
+                return reply.status == 200
+        except OSError:
+            return False
+
+    _wait_for(proc, serving)
+    exit_code, out, err = _stop(proc, signal.SIGINT)
+    assert exit_code == 0, err
+    assert "serving" in out and err == ""

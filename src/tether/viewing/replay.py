@@ -15,6 +15,7 @@ import html
 import http.server
 import json
 import re
+import signal
 import threading
 import time
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from tether.errors import TetherError
+from tether.interrupts import Stopped
 from tether.viewing.payload import build_payload
 from tether.viewing.runfolder import RunData, load_run
 
@@ -161,6 +163,9 @@ def serve(path: str | Path, port: int = 0, *, announce: Any = print) -> None:
             thread.join(0.5)
     except KeyboardInterrupt:
         pass
+    except Stopped as stop:  # Ctrl-C is how serving ends; SIGTERM stops the command
+        if stop.signum != signal.SIGINT:
+            raise
     finally:
         server.shutdown()
         server.server_close()
