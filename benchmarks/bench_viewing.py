@@ -44,7 +44,7 @@ from pathlib import Path
 from PIL import Image
 
 from tether.runfolder import machine
-from tether.viz.runfolder import load_run
+from tether.viewing.runfolder import load_run
 
 ROOT = Path(__file__).resolve().parents[1]
 LARGE_SET = [

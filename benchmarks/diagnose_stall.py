@@ -27,7 +27,7 @@ import pyarrow.parquet as pq
 
 from tether.config import load_scenario
 from tether.continuous.gradient import exact_force
-from tether.continuous.multi_target import traveling_forces
+from tether.continuous.motion import traveling_forces
 from tether.continuous.roles import PRIME, ROLE_NAMES
 from tether.graph.fiedler import fiedler
 from tether.paths.astar import plan_path

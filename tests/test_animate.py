@@ -16,8 +16,8 @@ from PIL import Image
 from tether.config import load_scenario
 from tether.errors import TetherError
 from tether.runner import run
+from tether.viewing.animate import animate
 from tether.viz import style
-from tether.viz.animate import animate
 
 
 def _run(name: str, root: Path, steps: int) -> Path:

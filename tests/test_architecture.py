@@ -23,6 +23,9 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         (
             "tether",
             "tether.errors",
+            "tether.interrupts",
+            "tether.progress",
+            "tether.suggest",
             "tether.registry",
             "tether.geometry",
             "tether.floats",
@@ -35,12 +38,21 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("motion", ("tether.paths", "tether.motion")),
     (
         "core",
-        ("tether.sim", "tether.record", "tether.team", "tether.viz.plots", "tether.viz.style"),
+        (
+            "tether.sim",
+            "tether.record",
+            "tether.targets_recorded",
+            "tether.team",
+            "tether.viz",
+        ),
     ),
     ("strategies", ("tether.silent", "tether.continuous", "tether.recurrent")),
     ("running", ("tether.runner", "tether.plugins", "tether.scenario_world")),
     ("experiments", ("tether.experiments", "tether.recurrent.report")),
-    ("interfaces", ("tether.cli", "tether.viz", "tether.export", "tether.viewer")),
+    (
+        "interfaces",
+        ("tether.cli", "tether.__main__", "tether.terminal", "tether.viewing", "tether.export"),
+    ),
 ]
 
 

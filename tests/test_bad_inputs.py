@@ -78,7 +78,6 @@ def test_good_versions_of_the_bases_validate(tmp_path, capsys, monkeypatch):
 # --------------------------------------------------------------------------- command lines
 
 COMMAND_LINES: dict[str, tuple[tuple[str, ...], str]] = {
-    "no arguments": ((), "Missing command"),
     "unknown command": (("fly",), "No such command 'fly'"),
     "run --seed abc": (("run", "--seed", "abc"), "--seed"),
     "run --seed -1": (("run", "--seed", "-1"), "--seed"),
@@ -276,8 +275,8 @@ def _proc(*args: str, cwd: Path, env: dict[str, str] | None = None) -> subproces
 
 @pytest.mark.parametrize(
     "args",
-    [(), ("fly",), ("run", "--seed", "abc"), ("validate", "bad.yaml")],
-    ids=["no-args", "unknown-command", "seed-abc", "bad-file"],
+    [("fly",), ("run", "--seed", "abc"), ("validate", "bad.yaml")],
+    ids=["unknown-command", "seed-abc", "bad-file"],
 )
 def test_real_processes_print_one_line(tmp_path, args):
     (tmp_path / "bad.yaml").write_bytes(b"name: caf\xe9\n")
@@ -298,7 +297,7 @@ def test_real_process_without_click_importable(tmp_path):
     )
     if typer_alone.returncode != 0:
         pytest.skip("this typer imports click itself (typer < 0.22 did)")
-    for args in [(), ("run", "--bogus"), ("run", "--seed", "abc")]:
+    for args in [("fly",), ("run", "--bogus"), ("run", "--seed", "abc")]:
         proc = _proc(*args, cwd=tmp_path, env=env)
         assert proc.returncode == 2, proc.stderr
         assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr

@@ -18,8 +18,8 @@ from tether.config import load_scenario
 from tether.errors import TetherError
 from tether.export.ros2 import export
 from tether.runner import run
+from tether.viewing.runfolder import load_run
 from tether.viz.boxes import obstacle_boxes
-from tether.viz.runfolder import load_run
 
 
 def _run(name: str, tmp_path: Path, steps: int) -> Path:

@@ -46,8 +46,9 @@ def test_enforce_holds_the_invariant_and_is_never_a_success_when_it_acted() -> N
 
 
 @pytest.mark.parametrize("eigensolver", ["estimator", "exact"])
-def test_off_moves_the_team_as_detect_does_and_measures_nothing(eigensolver: str,
-                                                                monkeypatch) -> None:
+def test_off_moves_the_team_as_detect_does_and_measures_nothing(
+    eigensolver: str, monkeypatch
+) -> None:
     m_detect, q_detect, _ = run("detect", 10, eigensolver)
     calls = {"n": 0}
     fiedler = WeightedGraph.fiedler

@@ -169,7 +169,7 @@ def test_fused_substep_force_is_the_chain() -> None:
     """One compiled call per sub-step (force_kernels.total_force_kernel) = the reference chain."""
     from tether.config import load_scenario
     from tether.continuous.dynamics import displacement_step
-    from tether.continuous.multi_target import travel_args, travel_gains, traveling_forces
+    from tether.continuous.motion import travel_args, travel_gains, traveling_forces
     from tether.continuous.roles import SECONDARY
     from tether.continuous.substep import fused_total_force
     from tether.runner import build

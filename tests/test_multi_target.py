@@ -11,7 +11,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from tether.config import scenario_from_dict
-from tether.continuous.multi_target import MultiTargetStrategy, traveling_forces
+from tether.continuous.motion import traveling_forces
+from tether.continuous.multi_target import MultiTargetStrategy
 from tether.continuous.roles import PRIME, SECONDARY
 from tether.continuous.targets import TargetBook
 from tether.record import TrajectoryRecorder

@@ -17,10 +17,10 @@ import pytest
 
 from _viewing_helpers import make_run_folder
 from tether.errors import TetherError
+from tether.viewing.payload import MISSING
+from tether.viewing.replay import THREE_SHA256, make_server, three_script, write_replay
+from tether.viewing.runfolder import load_run
 from tether.viz import style
-from tether.viz.payload import MISSING
-from tether.viz.replay import THREE_SHA256, make_server, three_script, write_replay
-from tether.viz.runfolder import load_run
 
 
 def _page_data(html: str) -> tuple[dict, dict[str, np.ndarray]]:
@@ -77,10 +77,10 @@ def test_page_is_self_contained():
     page = three_script()
     assert page.startswith("var THREE=(function()") and "return{" in page
     assert "export{" not in page
-    template = resources.files("tether.viz").joinpath("web", "replay.html").read_text()
+    template = resources.files("tether.viewing").joinpath("web", "replay.html").read_text()
     assert "Content-Security-Policy" in template and "default-src 'none'" in template
     assert not re.search(r"<(script|link|img)[^>]+(src|href)=", template)
-    vendored = resources.files("tether.viz").joinpath("vendor", "three.module.min.js")
+    vendored = resources.files("tether.viewing").joinpath("vendor", "three.module.min.js")
     assert hashlib.sha256(vendored.read_bytes()).hexdigest() == THREE_SHA256
 
 

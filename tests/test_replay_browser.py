@@ -16,7 +16,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from _viewing_helpers import make_run_folder
-from tether.viz.replay import write_replay
+from tether.viewing.replay import write_replay
 
 CHROMIUM_ARGS = [
     "--headless",

@@ -104,10 +104,10 @@ def test_progress_lines_are_printed_verbatim(tmp_path, capsys, monkeypatch):
     data["output"]["figures"] = False
     data["sweep"] = {"description": ["[nan, 3]", "[bold]b"]}
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
-    cli.main(["sweep", "s.yaml", "--out", "out"])
+    cli.main(["sweep", "s.yaml", "--out", "o[bold]ut"])  # a folder name with markup in it
     out = capsys.readouterr().out
-    assert re.search(r"out/description=\[nan, 3\]~[0-9a-f]{8}/seed-1 done", out)
-    assert re.search(r"out/description=\[bold\]b~[0-9a-f]{8}/seed-1 done", out)
+    assert re.search(r"o\[bold\]ut/description=nan_3~[0-9a-f]{8}~[0-9a-f]{8}/seed-1 done", out)
+    assert re.search(r"o\[bold\]ut/description=bold_b~[0-9a-f]{8}~[0-9a-f]{8}/seed-1 done", out)
     assert "[1/2]" in out and "[2/2]" in out
 
 

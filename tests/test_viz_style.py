@@ -17,10 +17,10 @@ from hypothesis import strategies as st  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 
 from _viewing_helpers import make_run_folder  # noqa: E402
+from tether.viewing.known import NEVER, first_seen_by_sight, first_seen_from_maps  # noqa: E402
+from tether.viewing.runfolder import frame_indices, load_run  # noqa: E402
 from tether.viz import style  # noqa: E402
 from tether.viz.boxes import coarsen, greedy_boxes  # noqa: E402
-from tether.viz.known import NEVER, first_seen_by_sight, first_seen_from_maps  # noqa: E402
-from tether.viz.runfolder import frame_indices, load_run  # noqa: E402
 from tether.world.grid import OccupancyGrid  # noqa: E402
 
 

@@ -7,8 +7,11 @@ printed as one line (file, field, fix) with exit code 2, never a traceback.
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
@@ -17,16 +20,61 @@ from rich.console import Console
 
 from tether.config import MAX_SEED
 from tether.errors import TetherError, TetherWarning
+from tether.interrupts import Stopped, stop_on_signals
+from tether.terminal.help import flow, summary
+from tether.terminal.words import count
 
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=False,
     help="tether: multi-robot teams that stay connected. Run `tether run` for a demo.",
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
 out = Console()
 err = Console(stderr=True)
 
 DEFAULT_SCENARIO = "silent_demo"
+
+
+def say(message: str) -> None:
+    """One line of output as written: no markup, no colouring, never wrapped to the terminal."""
+    out.print(message, markup=False, highlight=False, soft_wrap=True)
+
+
+@contextmanager
+def noting(note: str) -> Iterator[None]:
+    """Tell the user, if the block is stopped (Ctrl-C, SIGTERM), what the stop left behind."""
+    try:
+        yield
+    except Stopped as exc:
+        exc.note = note
+        raise
+
+
+def _version(value: bool) -> None:
+    if value:
+        from tether import __version__
+        from tether.runfolder import git_hash
+
+        say(f"tether {__version__} (commit {git_hash()})")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """tether: multi-robot teams that stay connected. Run `tether run` for a demo."""
+
+
+def _seed(value: int | None) -> int | None:
+    if value is not None and not 0 <= value <= MAX_SEED:
+        raise typer.BadParameter("must be an integer from 0 to 2**63 - 1")
+    return value
+
 
 ScenarioArg = Annotated[
     str, typer.Argument(help="Scenario YAML file, or the name of a built-in scenario.")
@@ -44,6 +92,9 @@ PluginOpt = Annotated[
     ),
 ]
 
+QuietOpt = Annotated[
+    bool, typer.Option("--quiet", "-q", help="No progress bar (or progress lines).")
+]
 QuickOpt = Annotated[
     bool,
     typer.Option(
@@ -74,28 +125,35 @@ def run(
         Path | None, typer.Option("--out", "-o", help="Run folder (default: runs/<name>-...)")
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(min=0, max=MAX_SEED, help="Override the scenario's seed.")
+        int | None, typer.Option(callback=_seed, help="Override the scenario's seed (0 or more).")
     ] = None,
     set_: SetOpt = None,
     no_figures: Annotated[bool, typer.Option("--no-figures", help="Skip the PNG figures.")] = False,
     animate_: Annotated[bool, typer.Option("--animate", help="Then `tether animate` it.")] = False,
     view_: Annotated[bool, typer.Option("--view", help="Then `tether view` it.")] = False,
     plugin: PluginOpt = None,
+    quiet: QuietOpt = False,
 ) -> None:
     """Run one scenario and write its run folder (scenario, Parquet records, summary, figures).
 
     Example: tether run scenarios/silent_paper.yaml --set strategy.params.d0_m=5
     """
     _load_plugins(plugin)
+    from tether.progress import StepProgress
     from tether.runner import run as run_scenario
+    from tether.runner import strategy_class
+    from tether.terminal.notes import run_notes
 
     sc = _load(scenario, set_)
-    out.print(
-        f"running {sc.name} ({sc.strategy.name}, {sc.team.n_robots} robots) ...",
-        markup=False,
-        highlight=False,
-    )
-    outcome = run_scenario(sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None)
+    say(f"running {sc.name} ({sc.strategy.name}, {count(sc.team.n_robots, 'robot')}) ...")
+    steps = None if quiet else StepProgress(out, say, sc.sim.max_steps)
+    try:
+        with noting("no run folder was written"):
+            outcome = run_scenario(sc, out_dir=out_dir, seed=seed, progress=steps,
+                                   figures=False if no_figures else None)  # fmt: skip
+    finally:
+        if steps is not None:
+            steps.stop()
     s = outcome.summary
     keys = [
         "steps",
@@ -115,11 +173,12 @@ def run(
         "rejected_substeps",
     ]
     for k in keys:
-        if k in s:
+        if s.get(k) is not None:  # None: not measured in this run (no obstacles, ...)
             v = s[k]
-            line = f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}"
-            out.print(line, markup=False, highlight=False)
-    out.print(f"results: {outcome.path}", markup=False, highlight=False, soft_wrap=True)
+            say(f"  {k:<24} {v:.4g}" if isinstance(v, float) else f"  {k:<24} {v}")
+    for note in run_notes(outcome.path, s, sc, strategy_class(sc)):
+        say(f"note: {note}")
+    say(f"results: {outcome.path}")
     if animate_:
         animate(outcome.path)
     if view_:
@@ -152,6 +211,7 @@ def sweep(
     set_: SetOpt = None,
     quick: QuickOpt = False,
     plugin: PluginOpt = None,
+    quiet: QuietOpt = False,
 ) -> None:
     """Run the scenario's `sweep:` combinations x seeds (resumable) into one table of trials.
 
@@ -168,17 +228,17 @@ def sweep(
     sc = _load(scenario, set_, quick)
     if out_dir is None:
         out_dir = Path(DEFAULT_SWEEP_DIR + (QUICK_SUFFIX if quick else ""))
-    result = run_sweep(
-        sc,
-        out_dir,
-        seeds=seeds,
-        executor=executor,
-        workers=workers,
-        address=address,
-        progress=progress_for(
-            out, lambda m: out.print(m, markup=False, highlight=False, soft_wrap=True)
-        ),
-    )
+    resume = f"finished trials are kept in {out_dir}; the same command resumes the sweep"
+    with noting(resume):
+        result = run_sweep(
+            sc,
+            out_dir,
+            seeds=seeds,
+            executor=executor,
+            workers=workers,
+            address=address,
+            progress=None if quiet else progress_for(out, say),
+        )
     out.print(
         f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}",
         markup=False,
@@ -255,30 +315,25 @@ def validate(
         check_sweep(small, strategy_class(small))
     check_writable(sc.output.dir)  # where `tether run` would write (without --out)
     size = ", quick size" if quick else ""
-    swept = f", sweep of {n_combos} combinations{size}" if n_combos else size
-    out.print(
-        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept})",
-        markup=False,
-        highlight=False,
-    )
+    swept = f", sweep of {count(n_combos, 'combination')}{size}" if n_combos else size
+    say(f"{scenario}: ok ({sc.strategy.name}, {count(sc.team.n_robots, 'robot')}{swept})")
 
 
 @app.command("list")
 def list_(plugin: PluginOpt = None) -> None:
-    """List built-in scenarios, strategies and scenes (with installed and --plugin ones)."""
-    _load_plugins(plugin)
-    from tether.config import builtin_scenarios, paper_campaigns
-    from tether.plugins import IGNORED, load_builtins
+    """List the built-in scenarios, campaigns, strategies, scenes and link models.
 
-    names = load_builtins()
-    out.print("scenarios:   " + ", ".join(builtin_scenarios()), markup=False)
-    out.print("campaigns:   " + ", ".join(paper_campaigns()) + "  (tether sweep NAME [--quick])",
-              markup=False)  # fmt: skip
-    out.print("strategies:  " + ", ".join(names["strategies"]), markup=False)
-    out.print("scenes:      " + ", ".join(names["scenes"]), markup=False)
-    out.print("link models: " + ", ".join(names["link models"]), markup=False)
+    Each with what it is, and where its name goes (a command or a scenario key); with
+    installed plug-in packages' and those of --plugin.
+    """
+    _load_plugins(plugin)
+    from tether.plugins import IGNORED
+    from tether.terminal.listing import listing_lines
+
+    for line in listing_lines():
+        say(line)
     for line in IGNORED:
-        out.print(f"ignored plug-in: {line}", markup=False, highlight=False, soft_wrap=True)
+        say(f"ignored plug-in: {line}")
 
 
 RunDirArg = Annotated[Path, typer.Argument(help="A run folder written by `tether run`.")]
@@ -294,8 +349,11 @@ def animate(
     stride: Annotated[int | None, typer.Option(min=1, help="Every N-th recorded step.")] = None,
     width: Annotated[int, typer.Option(min=64, max=8192, help="Width in pixels.")] = 720,
 ) -> None:
-    """Animate a run folder (GIF, or MP4 where ffmpeg exists), e.g. tether animate runs/x"""
-    from tether.viz.commands import animate_command
+    """Animate a run folder as a GIF (or an MP4 where ffmpeg exists).
+
+    Example: tether animate runs/silent_demo --fps 20 --format mp4
+    """
+    from tether.viewing.commands import animate_command
 
     animate_command(
         run_dir,
@@ -305,7 +363,7 @@ def animate(
         duration_s=duration,
         stride=stride,
         width_px=width,
-        say=out.print,
+        say=say,
     )
 
 
@@ -320,9 +378,9 @@ def view(
     ] = 8000,
 ) -> None:
     """Write a self-contained, offline HTML 3-D replay of a run folder."""
-    from tether.viz.commands import view_command
+    from tether.viewing.commands import view_command
 
-    view_command(run_dir, out_file, max_mb=max_mb, serve=serve, port=port, say=out.print)
+    view_command(run_dir, out_file, max_mb=max_mb, serve=serve, port=port, say=say)
 
 
 @app.command("export")
@@ -332,9 +390,9 @@ def export_(
     out_path: Annotated[Path | None, typer.Option("--out", "-o", help="File or folder.")] = None,
 ) -> None:
     """Export a run folder as ROS 2 messages (Foxglove, RViz, ros2 bag play)."""
-    from tether.viz.commands import export_command
+    from tether.viewing.commands import export_command
 
-    export_command(run_dir, out_path, fmt=fmt, say=out.print)
+    export_command(run_dir, out_path, fmt=fmt, say=say)
 
 
 def _usage_error_class() -> type[Exception]:
@@ -376,11 +434,19 @@ def main(argv: list[str] | None = None) -> None:
 
     Exit codes: 0 success, 2 bad input (one ``error:`` line naming the file or
     option, the field and the fix; usage errors too), 1 an internal error (one
-    line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted.
+    line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted by
+    Ctrl-C and 143 by SIGTERM (one line; a run folder being written is removed).
     """
     warnings.showwarning = _show_warning
+    args = sys.argv[1:] if argv is None else list(argv)
     try:
-        app(args=argv, prog_name="tether", standalone_mode=False)
+        with stop_on_signals():
+            code = app(args=args or ["--help"], prog_name="tether", standalone_mode=False)
+        if isinstance(code, int) and code == 130:  # typer's KeyboardInterrupt, no handler
+            raise Stopped(signal.SIGINT)
+    except Stopped as exc:  # Ctrl-C or SIGTERM: what the command was doing is undone
+        err.print(str(exc), highlight=False, markup=False, soft_wrap=True)
+        sys.exit(exc.code)
     except TetherError as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)
@@ -388,7 +454,7 @@ def main(argv: list[str] | None = None) -> None:
         code = getattr(exc, "exit_code", getattr(exc, "code", 0))
         sys.exit(code or 0)
     except (typer.Abort, KeyboardInterrupt):
-        err.print("aborted", highlight=False, markup=False)
+        err.print(str(Stopped(signal.SIGINT)), highlight=False, markup=False)
         sys.exit(130)
     except Exception as exc:  # usage errors, and anything unexpected
         if isinstance(exc, _usage_error_class()):
@@ -411,6 +477,10 @@ def main(argv: list[str] | None = None) -> None:
         )
         sys.exit(1)
 
+
+for _command in app.registered_commands:  # help paragraphs flow to the terminal's width
+    _command.help = flow(_command.callback.__doc__)
+    _command.short_help = summary(_command.callback.__doc__)
 
 if __name__ == "__main__":
     main()

@@ -27,6 +27,7 @@ from pydantic import (
 )
 
 from tether.errors import ScenarioError
+from tether.suggest import did_you_mean, keys_at
 from tether.sweepspec import MAX_SWEEP_COMBINATIONS as MAX_SWEEP_COMBINATIONS  # re-exported
 from tether.sweepspec import MAX_SWEEP_TRIALS as MAX_SWEEP_TRIALS  # re-exported
 from tether.sweepspec import SweepError, SweepSpec, parse_sweep
@@ -194,8 +195,14 @@ def _loc(loc: tuple[Any, ...]) -> str:
     return ".".join(str(p) for p in loc) or "(top level)"
 
 
-def format_validation_error(source: str, err: ValidationError, prefix: str = "") -> str:
-    """One line: ``file: field: message`` for the first error, plus a count of the rest."""
+def format_validation_error(
+    source: str, err: ValidationError, prefix: str = "", model: type[BaseModel] | None = None
+) -> str:
+    """One line: ``file: field: message`` for the first error, plus a count of the rest.
+
+    With the ``model`` that was validated, a misspelt key or choice names the closest
+    valid one (``unknown key (did you mean 'gamma'?)``).
+    """
     errors = err.errors()
     first = errors[0]
     loc = _loc(tuple(first["loc"]))
@@ -203,7 +210,9 @@ def format_validation_error(source: str, err: ValidationError, prefix: str = "")
         loc = f"{prefix}.{loc}" if first["loc"] else prefix
     kind = first["type"]
     if kind == "extra_forbidden":
-        msg = "unknown key; remove it or check its spelling"
+        keys = keys_at(model, tuple(first["loc"])[:-1])
+        hint = did_you_mean(str(first["loc"][-1]), keys) if first["loc"] else ""
+        msg = f"unknown key{hint}; remove it or check its spelling"
     elif kind == "missing":
         msg = "required field is missing"
     else:
@@ -211,33 +220,46 @@ def format_validation_error(source: str, err: ValidationError, prefix: str = "")
         if "input" in first and not isinstance(first["input"], dict | list):
             got = repr(first["input"])
             msg += f" (got {got if len(got) <= 60 else got[:57] + '...'})"
+        expected = re.findall(r"'([^']*)'", str((first.get("ctx") or {}).get("expected", "")))
+        if kind == "literal_error" and isinstance(first.get("input"), str):
+            msg += did_you_mean(first["input"], expected)
     more = f" (+{len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
     return " ".join(f"{source}: {loc}: {msg}{more}".split())
 
 
+#: characters a run folder name keeps from a value (others become ``_``)
+_NAME_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._+-")
+
+
 def _label_part(key: str, value: Any) -> str:
+    """``leaf=value`` in characters safe in a file name: a number whole, a text cleaned
+    (and hashed if it had to be), a list or mapping as a short hash of its exact value."""
     leaf = key.rsplit(".", 1)[-1]
-    part = f"{leaf}={value}"
-    safe = "".join(c if c.isprintable() and c not in "/\\" else "_" for c in part)
-    if safe == part and len(part.encode()) <= MAX_LABEL_BYTES and not part.startswith("."):
-        return part
-    digest = hashlib.sha1(repr(value).encode()).hexdigest()[:10]
-    head = safe[:40].rstrip()
-    return f"{head}~{digest}"
+    digest = hashlib.sha1(repr(value).encode()).hexdigest()[:8]
+    if isinstance(value, dict | list | tuple):
+        return f"{leaf}=h{digest}"
+    text = str(value)
+    safe = re.sub(r"_+", "_", "".join(c if c in _NAME_CHARS else "_" for c in text))
+    if safe == text and len(text.encode()) <= MAX_LABEL_BYTES and not text.startswith("."):
+        return f"{leaf}={text}"
+    return f"{leaf}={safe.strip('_.')[:40]}~{digest}"
 
 
 def sweep_label(combo: dict[str, Any]) -> str:
     """The run-folder name of one sweep combination: ``d0_m=5.0,gamma=0.2`` (``base`` if none).
 
-    A value that would make an unsafe or too long file name (a path, a
-    100-point waypoint list) is shortened to its first characters and a hash of
-    its exact value, so every combination keeps its own folder.
+    Only letters, digits and ``._+-=,~`` appear: a list or mapping value (a waypoint
+    list, a scene's parameters) is a short hash of its exact value (``params=h3fa2c1b0``),
+    a text with other characters is cleaned and given a hash, so every combination keeps
+    its own folder and no name needs quoting in a shell.
     """
     if not combo:
         return "base"
-    label = ",".join(_label_part(k, v) for k, v in combo.items())
-    if len(label.encode()) > 200:
-        label = f"{label[:100]}~{hashlib.sha1(label.encode()).hexdigest()[:10]}"
+    parts = [_label_part(k, v) for k, v in combo.items()]
+    label = ",".join(parts)
+    if len(label.encode()) > 200:  # whole parts up to 100 bytes, then a hash of all
+        kept = [p for k, p in enumerate(parts) if len(",".join(parts[: k + 1]).encode()) <= 100]
+        label = f"{','.join(kept)}~{hashlib.sha1(label.encode()).hexdigest()[:10]}"
     return label
 
 
@@ -350,12 +372,12 @@ def _read_yaml(path: Path, label: str) -> dict[str, Any]:
         raw = path.read_bytes()
     except FileNotFoundError:
         names = ", ".join(builtin_scenarios())
-        hint = ""
+        hint = did_you_mean(Path(str(label)).stem, [*builtin_scenarios(), *paper_campaigns()])
         if str(label).lower() in ("true", "false", "yes", "no", "0", "1"):
             hint = " (flags such as --no-figures take no value)"
         raise ScenarioError(
-            f"{label}: file not found; give a scenario file or a built-in name ({names}, "
-            f"or a paper campaign: `tether list`){hint}"
+            f"{label}: file not found{hint}; give a scenario file or a built-in name ({names}, "
+            "or a paper campaign: `tether list`)"
         ) from None
     except IsADirectoryError:
         raise ScenarioError(f"{label}: is a folder; give a scenario YAML file") from None
@@ -381,7 +403,7 @@ def scenario_from_dict(
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:
-        raise ScenarioError(format_validation_error(source, exc)) from None
+        raise ScenarioError(format_validation_error(source, exc, model=Scenario)) from None
     scenario._source = source
     scenario._base_dir = base_dir if base_dir is not None else Path(".")
     sweep_spec(scenario)  # a malformed sweep block is refused with the scenario

@@ -17,6 +17,7 @@ folder's tables::
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict
 from typing import Any
 
@@ -36,12 +37,19 @@ class TrajectoryRecorder:
 
     ``every`` keeps robot positions and links only every k-th step (team
     metrics and step values are kept at every step); ``keep_positions=False``
-    drops them altogether (large teams).
+    drops them altogether (large teams). ``on_step`` is called with each step
+    number once it is recorded (a progress bar).
     """
 
-    def __init__(self, every: int = 1, keep_positions: bool = True) -> None:
+    def __init__(
+        self,
+        every: int = 1,
+        keep_positions: bool = True,
+        on_step: Callable[[int], None] | None = None,
+    ) -> None:
         self.every = max(int(every), 1)
         self.keep_positions = keep_positions
+        self.on_step = on_step
         self.steps: list[StepRecord] = []
         self.values: list[dict[str, Any]] = []
         self.position_steps: list[int] = []
@@ -71,6 +79,8 @@ class TrajectoryRecorder:
             self.links.append(obs.pairs.copy())
             self.robot_values.append({k: np.asarray(v).copy() for k, v in
                                       (robot_values or {}).items()})  # fmt: skip
+        if self.on_step is not None:
+            self.on_step(rec.step)
 
     def nodes(self, k: int) -> np.ndarray:
         """Positions of every graph node at the ``k``-th recorded step (robots, then fixed)."""

@@ -259,19 +259,26 @@ class RunFolder:
         self._remove_created()
 
 
-def git_hash() -> str | None:
-    """The git commit of the tether source tree, if it is a checkout."""
+def git_hash() -> str:
+    """The git commit of tether's source: the checkout's ``HEAD`` when tether runs from
+    one, else the commit its package was built from (``build_commit.txt``, written at
+    build time), else ``"unknown"``. A checkout that merely contains an installed tether
+    (a virtual environment inside another project) is not mistaken for its source."""
+    here = Path(__file__).parent
     try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"],
-            cwd=Path(__file__).parent,
-            capture_output=True,
-            text=True,
-            timeout=5,
-        )
+        tracked = subprocess.run(["git", "ls-files", "--error-unmatch", "__init__.py"],
+                                 cwd=here, capture_output=True, timeout=5)  # fmt: skip
+        if tracked.returncode == 0:
+            out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
+                                 text=True, timeout=5)  # fmt: skip
+            if out.returncode == 0 and out.stdout.strip():
+                return out.stdout.strip()
     except (OSError, subprocess.TimeoutExpired):
-        return None
-    return out.stdout.strip() or None if out.returncode == 0 else None
+        pass
+    try:
+        return (here / "build_commit.txt").read_text().strip() or "unknown"
+    except OSError:
+        return "unknown"
 
 
 def provenance() -> dict[str, Any]:

@@ -13,6 +13,7 @@ import copy
 import datetime as dt
 import inspect
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -40,6 +41,7 @@ from tether.runfolder import RunFolder
 from tether.scenario_world import STAND_IN_KEY, build_world, keep_scene_files, scene_files
 from tether.sensing import SensorModel, sensed_pairs
 from tether.sim import Strategy, TeamState, simulate
+from tether.suggest import did_you_mean
 from tether.sweepspec import canonical, value_key
 from tether.team import initial_positions
 from tether.viz.plots import link_range_m, links_over_time, team_snapshot
@@ -82,7 +84,8 @@ def strategy_class(scenario: Scenario) -> type[Strategy]:
     name = scenario.strategy.name
     if name not in STRATEGIES:
         raise ScenarioError(
-            f"{scenario.source}: strategy.name: unknown strategy {name!r}; expected one of: "
+            f"{scenario.source}: strategy.name: unknown strategy {name!r}"
+            f"{did_you_mean(name, STRATEGIES.names())}; expected one of: "
             f"{', '.join(STRATEGIES.names())} (or your own module: --plugin FILE.py)"
         )
     return STRATEGIES.get(name)
@@ -93,7 +96,7 @@ def strategy_params(scenario: Scenario, cls: type) -> Any:
         return cls.Params.model_validate(scenario.strategy.params)
     except ValidationError as exc:
         raise ScenarioError(
-            format_validation_error(scenario.source, exc, prefix="strategy.params")
+            format_validation_error(scenario.source, exc, "strategy.params", cls.Params)
         ) from None
 
 
@@ -355,12 +358,14 @@ def run(
     out_dir: str | Path | None = None,
     seed: int | None = None,
     figures: bool | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> RunOutcome:
     """Run one scenario and write its run folder; returns the folder and the summary.
 
     The folder is committed as a whole (:class:`tether.runfolder.RunFolder`):
     ``summary.json`` is written last, and the folder appears at ``out_dir``
-    only when the run and its figures are complete.
+    only when the run and its figures are complete. ``progress`` is called with
+    each step number as the run goes (``tether run``'s progress bar).
     """
     scenario = as_scenario(scenario)
     seed = check_seed(seed)
@@ -377,7 +382,7 @@ def run(
     path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
     folder = RunFolder(path)
     try:
-        recorder = TrajectoryRecorder(every=scenario.output.record_every)
+        recorder = TrajectoryRecorder(every=scenario.output.record_every, on_step=progress)
         start = time.perf_counter()
         result = simulate(
             built.world,
@@ -450,14 +455,5 @@ def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Any]:
     return figs
 
 
-__all__ = [
-    "Built",
-    "RunOutcome",
-    "TetherError",
-    "as_scenario",
-    "build",
-    "build_world",
-    "check_seed",
-    "run",
-    "run_figures",
-]
+__all__ = ["Built", "RunOutcome", "TetherError", "as_scenario", "build", "build_world",
+           "check_seed", "run", "run_figures"]  # fmt: skip

@@ -32,6 +32,7 @@ import yaml
 from tether.config import Scenario, YamlLoader
 from tether.errors import MapError, ScenarioError, TetherWarning
 from tether.registry import SCENES
+from tether.suggest import did_you_mean
 from tether.world.scenes import make_scene
 from tether.world.world import World
 
@@ -172,7 +173,8 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
     src, cfg = scenario.source, scenario.world
     if cfg.scene not in SCENES:
         raise ScenarioError(
-            f"{src}: world.scene: unknown scene {cfg.scene!r}; expected one of: "
+            f"{src}: world.scene: unknown scene {cfg.scene!r}"
+            f"{did_you_mean(cfg.scene, SCENES.names())}; expected one of: "
             f"{', '.join(SCENES.names())}"
         )
     params, files = scene_files(scenario)

@@ -135,6 +135,16 @@ class SweepSpec:
             out.append({key: combo[key] for key in self.axes})  # file order of the axes
         return out
 
+    def followers(self) -> set[str]:
+        """The axes of each zip group after its first, when the first alone tells the
+        group's rows apart: names and legends show the first axis of such a group only."""
+        out: set[str] = set()
+        for group in self.groups:
+            lead = [value_key(v) for v in self.axes[group[0]]]
+            if len(group) > 1 and len(set(lead)) == len(lead):
+                out.update(group[1:])
+        return out
+
     def seed_list(self, base_seed: int, override: int | list[int] | None = None) -> list[int]:
         """The seeds to run: ``override`` (e.g. ``--seeds``), else the block's, else one."""
         seeds = override if override is not None else self.seeds

@@ -52,7 +52,7 @@ def _finish(fig: Figure, xlabel: str, ylabel: str, title: str, legend: bool) -> 
     ax.set_facecolor(style.BACKGROUND)
     ax.set_title(f"{title}\n{BAND_NOTE}", fontsize=9)
     if legend:
-        ax.legend(fontsize=8)
+        style.place_legend(ax)
     return fig
 
 

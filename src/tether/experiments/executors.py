@@ -15,14 +15,18 @@ client: ``address`` of a running scheduler, e.g. ``tcp://10.0.0.5:8786`` started
 from __future__ import annotations
 
 import os
+import signal
+import sys
 import traceback
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from tether.errors import TetherError
+from tether.interrupts import Stopped, raise_on_sigterm
 from tether.registry import Registry
 
 __all__ = ["EXECUTORS", "Trial", "TrialOutcome", "check_executor", "execute", "run_trial"]
@@ -103,10 +107,46 @@ def _serial(trials: list[Trial], workers: int, address: str | None) -> Iterator[
         yield run_trial(trial)
 
 
+#: seconds a stopped worker has to remove the run folder it was writing before it is killed
+STOP_GRACE_S = 10.0
+
+
+def _worker_start() -> None:
+    """A worker stops cleanly on SIGTERM, leaves Ctrl-C to its parent, dies with it (Linux)."""
+    raise_on_sigterm()
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        # PR_SET_PDEATHSIG: SIGTERM when the parent is gone, even killed with SIGKILL
+        with suppress(OSError, AttributeError):
+            ctypes.CDLL(None).prctl(1, int(signal.SIGTERM))
+
+
+def _trial_in_worker(trial: Trial) -> TrialOutcome:
+    try:
+        return run_trial(trial)
+    except Stopped as stop:  # the run folder is removed already; leave the pool's loop
+        os._exit(stop.code)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Cancel the queued trials and stop the workers (SIGTERM, then SIGKILL after a grace)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        proc.terminate()
+    for proc in processes:
+        proc.join(STOP_GRACE_S)
+        if proc.is_alive():  # pragma: no cover (a worker stuck in C code)
+            proc.kill()
+            proc.join()
+
+
 @EXECUTORS.register("processes")
 def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
-    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
-        submitted = {pool.submit(run_trial, t): t for t in trials}
+    pool = ProcessPoolExecutor(max_workers=max(1, workers), initializer=_worker_start)
+    try:
+        submitted = {pool.submit(_trial_in_worker, t): t for t in trials}
         pending = set(submitted)
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -115,6 +155,10 @@ def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterat
                     yield future.result()
                 except Exception as exc:  # the worker process died (killed, out of memory)
                     yield failed(submitted[future], exc)
+    except BaseException:  # stopped (Ctrl-C, SIGTERM) or closed early: no worker outlives it
+        _stop_workers(pool)
+        raise
+    pool.shutdown(wait=True)
 
 
 @EXECUTORS.register("dask")

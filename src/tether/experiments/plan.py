@@ -31,11 +31,16 @@ from tether.sweepspec import combo_hash
 __all__ = ["check_combinations", "combo_id", "seeds_of", "trial_id", "trial_scenario", "trials_of"]
 
 
-def combo_id(combo: dict[str, Any]) -> str:
-    """The folder name of a combination: readable label, ``~`` and a short hash (``base``)."""
+def combo_id(combo: dict[str, Any], followers: set[str] | frozenset[str] = frozenset()) -> str:
+    """The folder name of a combination: readable label, ``~`` and a short hash (``base``).
+
+    The label leaves out ``followers`` (zipped axes named by their group's first axis,
+    :meth:`tether.sweepspec.SweepSpec.followers`); the hash covers every value.
+    """
     if not combo:
         return "base"
-    return f"{sweep_label(combo)}~{combo_hash(combo)}"
+    shown = {k: v for k, v in combo.items() if k not in followers} or combo
+    return f"{sweep_label(shown)}~{combo_hash(combo)}"
 
 
 def trial_id(out_dir: str | Path, trial: Trial) -> str:
@@ -90,7 +95,8 @@ def trials_of(
     """
     seed_list = seeds_of(scenario, seeds)
     axes = check_sweep(scenario, strategy_class(scenario))
-    combos = sweep_spec(scenario).combinations(axes)
+    spec = sweep_spec(scenario)
+    combos, followers = spec.combinations(axes), spec.followers()
     if len(combos) * len(seed_list) > MAX_SWEEP_TRIALS:  # for --seeds (the block's: parsed)
         raise TetherError(
             f"{scenario.source}: sweep: {len(combos):,} combinations x {len(seed_list):,} seeds = "
@@ -103,7 +109,7 @@ def trials_of(
     for combo in combos:
         trial = trial_scenario(scenario, combo)
         data = trial.model_dump(mode="json")
-        folder = out / combo_id(combo)
+        folder = out / combo_id(combo, followers)
         for seed in seed_list:
             run_dir = str(folder / f"seed-{seed}")
             trial_ = Trial(data, trial.source, str(trial.base_dir), seed, run_dir, plugins)

@@ -10,6 +10,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from tether.experiments.executors import TrialOutcome
+from tether.progress import progress_bar
 
 __all__ = ["LineProgress", "RichProgress", "TrialProgress", "progress_for"]
 
@@ -61,27 +62,10 @@ class RichProgress:
     """
 
     def __init__(self, console: Any) -> None:
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
+        from rich.progress import TextColumn
 
-        self._bar = Progress(
-            TextColumn("trials"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TextColumn("[red]{task.fields[failed]} failed"),
-            TextColumn("elapsed"),
-            TimeElapsedColumn(),
-            TextColumn("left"),
-            TimeRemainingColumn(),
-            console=console,
-            transient=False,
-        )
+        failed = TextColumn("[red]{task.fields[failed]} failed")
+        self._bar = progress_bar("trials", console, transient=False, extra=(failed,))
         self._task: Any = None
 
     def start(self, total: int, skipped: int) -> None:

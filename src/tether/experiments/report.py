@@ -134,6 +134,20 @@ def _statistics(results: SweepResults) -> list[str]:
     return lines
 
 
+def _constants(results: SweepResults) -> list[str]:
+    """The metrics with one value over every finished trial: a table, not left out."""
+    constant = results.constant_metrics()
+    if not constant:
+        return []
+    lines = ["### The same in every finished trial", "",
+             "These metrics did not vary, so they have no spread to test.", "",
+             "| metric | value |", "|---|---:|"]  # fmt: skip
+    for metric, value in constant.items():
+        shown = str(value).lower() if isinstance(value, bool) else _num(value)
+        lines.append(f"| {metric} | {shown} |")
+    return [*lines, ""]
+
+
 def _header(results: SweepResults, command: str) -> list[str]:
     done, failed = results.done, results.failed
     seeds = sorted({r["seed"] for r in results.rows if r.get("seed") is not None})
@@ -199,7 +213,7 @@ def write_report(sweep_dir: str | Path, command: str | None = None) -> Path:
                 f"*{caption}*",
                 "",
             ]
-        lines += ["## Statistics", "", *_statistics(results)]
+        lines += ["## Statistics", "", *_statistics(results), *_constants(results)]
     else:
         lines += ["No trial finished: nothing to draw or test.", ""]
     lines.append(METHODS)

@@ -17,7 +17,7 @@ import yaml
 from tether.config import sweep_label
 from tether.errors import TetherError
 from tether.experiments.store import STORE_FILE, SWEEP_SCENARIO, SWEEP_TABLE
-from tether.sweepspec import SweepError, parse_sweep, value_key
+from tether.sweepspec import SweepError, parse_sweep
 
 __all__ = ["SweepResults", "load_results", "step_series"]
 
@@ -97,35 +97,41 @@ class SweepResults:
 
         The column a team-size axis sets (``n_robots`` for ``team.n_robots``) is left out.
         """
+        return [key for key, finite in self._numeric_columns().items() if len(set(finite)) > 1]
+
+    def constant_metrics(self) -> dict[str, float | bool]:
+        """Summary columns that are numbers (or booleans) with one value over every finished
+        trial (``connected_all_steps`` true, ``collisions`` 0, ...), with that value."""
+        out: dict[str, float | bool] = {}
+        for key, finite in self._numeric_columns().items():
+            if len(set(finite)) == 1:
+                value = self.done[0].get(key)
+                out[key] = value if isinstance(value, bool) else finite[0]
+        return out
+
+    def _numeric_columns(self) -> dict[str, list[float]]:
+        """Metric columns (numbers or booleans) -> their finite values over finished trials."""
         done = self.done
         if not done:
-            return []
+            return {}
         leaves = {axis.rsplit(".", 1)[-1] for axis in self.axes}
-        out = []
+        out = {}
         for key in done[0]:
             if key in NOT_METRICS or key.startswith("param:") or key in leaves:
                 continue
             values = [r.get(key) for r in done]
             if not all(isinstance(v, int | float) for v in values if v is not None):
                 continue
-            finite = [float(v) for v in values if v is not None and np.isfinite(float(v))]
-            if len(set(finite)) > 1:
-                out.append(key)
+            out[key] = [float(v) for v in values if v is not None and np.isfinite(float(v))]
         return out
 
 
 def _zip_followers(scenario: dict[str, Any]) -> set[str]:
     """The axes of the sweep's zip groups after the first, where the first tells rows apart."""
     try:
-        spec = parse_sweep(scenario.get("sweep") or {})
+        return parse_sweep(scenario.get("sweep") or {}).followers()
     except SweepError:
         return set()
-    out: set[str] = set()
-    for group in spec.groups:
-        lead = [value_key(v) for v in spec.axes[group[0]]]
-        if len(group) > 1 and len(set(lead)) == len(lead):
-            out.update(group[1:])
-    return out
 
 
 def load_results(folder: str | Path) -> SweepResults:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from contextlib import closing, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 
-from tether.config import Scenario, sweep_label
+from tether.config import Scenario, sweep_label, sweep_spec
 from tether.errors import OutputError, TetherError
 from tether.experiments.executors import Trial, TrialOutcome, check_executor, execute
 from tether.experiments.plan import check_combinations, trial_id, trial_scenario, trials_of
@@ -109,15 +110,19 @@ def run_trials(
     if reporter is not None:
         reporter.start(len(todo), len(trials) - len(todo))
     try:
-        for outcome in execute(todo, executor, workers=workers, address=address):
-            run_dir = outcome.trial.run_dir
-            if outcome.summary is None:
-                errors.append(f"{run_dir} (seed {outcome.trial.seed}): {outcome.error}")
-                failures[run_dir] = outcome
-            else:
-                summaries[run_dir] = outcome.summary
-            if reporter is not None:
-                reporter.advance(outcome, len(summaries) - (len(trials) - len(todo)), len(errors))
+        outcomes = execute(todo, executor, workers=workers, address=address)
+        stop = closing(outcomes) if hasattr(outcomes, "close") else nullcontext()
+        with stop:  # an interrupt stops the executor's workers at once
+            for outcome in outcomes:
+                run_dir = outcome.trial.run_dir
+                if outcome.summary is None:
+                    errors.append(f"{run_dir} (seed {outcome.trial.seed}): {outcome.error}")
+                    failures[run_dir] = outcome
+                else:
+                    summaries[run_dir] = outcome.summary
+                if reporter is not None:
+                    done = len(summaries) - (len(trials) - len(todo))
+                    reporter.advance(outcome, done, len(errors))
     finally:
         if reporter is not None:
             reporter.stop()
@@ -186,7 +191,8 @@ def run_sweep(
     finished = [r for r in rows if r["status"] == "done"]
     try:
         table = write_rows(out / SWEEP_TABLE, rows)
-        drawn = sweep_figures(finished, scenario.team.n_robots, scenario.name)
+        followers = sweep_spec(scenario).followers()
+        drawn = sweep_figures(finished, scenario.team.n_robots, scenario.name, followers)
         figures = [save_figure(fig, out / "figures" / name) for fig, name in drawn]
     except OSError as exc:
         raise OutputError(f"{out}: cannot write the sweep table ({exc.strerror or exc})") from None
@@ -209,12 +215,17 @@ _SWEEP_FIGURES = {
 
 
 def sweep_figures(
-    rows: list[dict[str, Any]], n_robots: int, name: str | None = None
+    rows: list[dict[str, Any]],
+    n_robots: int,
+    name: str | None = None,
+    followers: set[str] | frozenset[str] = frozenset(),
 ) -> list[tuple[Any, str]]:
     """Per-step metrics of the first seed of each combination, one line per combination.
 
     Links over time (the silent paper's Fig. 5) and, where runs record it, the
     explored area (exploration strategies), in the one look of :mod:`tether.viz.plots`.
+    A combination is labelled by its axes less ``followers`` (zipped axes named by
+    their group's first axis).
     """
     files = [Path(r["run_dir"]) / "steps.parquet" for r in rows]
     files = [f for f in files if f.exists()]
@@ -228,7 +239,8 @@ def sweep_figures(
             continue
         series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for row in rows:
-            label = sweep_label({k[6:]: v for k, v in row.items() if k.startswith("param:")})
+            label = sweep_label({k[6:]: v for k, v in row.items()
+                                 if k.startswith("param:") and k[6:] not in followers})  # fmt: skip
             steps_file = Path(row["run_dir"]) / "steps.parquet"
             if label in series or not steps_file.exists():
                 continue

@@ -37,8 +37,8 @@ import numpy as np
 
 from tether.errors import TetherError
 from tether.export.cdr import point_marker_array
+from tether.viewing.runfolder import RunData, load_run
 from tether.viz import style
-from tether.viz.runfolder import RunData, load_run
 
 FRAME_ID = "map"
 MAX_KNOWN_MAPS = 100
@@ -295,7 +295,7 @@ def _stream(run: RunData, msgs: Messages) -> Iterator[tuple[str, str, int, bytes
     known_frames: set[int] = set()
     first = None
     if run.is_exploration and grid is not None and grid.dim == 2:
-        from tether.viz.known import first_seen
+        from tether.viewing.known import first_seen
 
         first, _ = first_seen(run)
         if first is not None:

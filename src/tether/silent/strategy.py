@@ -125,6 +125,11 @@ class SilentStrategy(Strategy):
 
     name = "silent"
     Params = SilentParams
+    #: said at the end of a run among obstacles that lost connectivity (``tether run``)
+    free_space_guarantee = (
+        "silent's guarantee (Theorem 1 of its paper) holds in free space: among obstacles, "
+        "a wall that comes between two robots in range cuts their link without warning"
+    )
 
     def __init__(
         self,

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tether.targets_recorded import FINISHED, OPEN, recorded_targets
 from tether.viz import style
 
 if TYPE_CHECKING:
@@ -84,7 +85,7 @@ def series_over_time(
     ax.set_facecolor(style.BACKGROUND)
     if title:
         ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8)
+    style.place_legend(ax)
     return fig
 
 
@@ -219,6 +220,18 @@ class _Panel:
                         zorder=5,
                     )
 
+    def targets(self, points: np.ndarray, states: np.ndarray) -> None:
+        """Targets as stars: filled while open, hollow once reached or dropped."""
+        views = [(self.top, 0, 1)] + ([(self.side, 0, 2)] if self.side is not None else [])
+        for ax, a, b in views:
+            if b >= points.shape[1]:
+                continue
+            for state, face in ((OPEN, style.TARGET), (FINISHED, "none")):
+                mask = states == state
+                if mask.any():
+                    ax.scatter(points[mask, a], points[mask, b], marker="*", s=110, c=face,
+                               edgecolors=style.ROBOT_EDGE, linewidths=0.7, zorder=5)  # fmt: skip
+
     def path(self, path: np.ndarray) -> None:
         self.top.plot(path[:, 0], path[:, 1], ls="--", color=style.PATH, lw=1.4, zorder=2)
         if self.side is not None and path.shape[1] > 2:
@@ -240,6 +253,8 @@ def snapshot(
     title: str | None = None,
     whole_world: bool = False,
     path_label: str = "planned path",
+    targets: np.ndarray | None = None,
+    target_states: Sequence[np.ndarray] | None = None,
 ) -> Figure:
     """The team at a few instants (the silent paper's Fig. 4), in the one look.
 
@@ -247,10 +262,12 @@ def snapshot(
     node indices, where ``n..`` are the ``fixed`` nodes (e.g. a base station, drawn as a
     square). Robots are coloured by ``roles[k]`` (names), else by ``connected[k]``
     (to the base station), else all alike; ``leader`` is magenta and larger. Links are
-    coloured by margin ``1 - d / range_m`` (plain without a range). All panels share
-    one view: the whole grid with ``whole_world``, else the box around the team, the
-    path and the fixed nodes. 3-D runs get a side view (x against height) under each
-    top view, which shows buildings as footprints shaded by height.
+    coloured by margin ``1 - d / range_m`` (plain without a range). ``targets`` ``(m, dim)``
+    are stars, drawn by ``target_states[k]`` (:mod:`tether.targets_recorded`; default:
+    all open). All panels share one view: the whole grid with ``whole_world``, else the
+    box around the team, the path and the fixed nodes. 3-D runs get a side view (x
+    against height) under each top view, which shows buildings as footprints shaded by
+    height.
     """
     k = len(positions)
     dim = int(np.asarray(positions[0]).shape[1])
@@ -259,6 +276,9 @@ def snapshot(
     extra = [np.asarray(path, dtype=float)[:, :2]] if path is not None else []
     if fixed is not None:
         extra.append(np.asarray(fixed, dtype=float)[:, :2])
+    if targets is not None:
+        targets = np.atleast_2d(np.asarray(targets, dtype=float))
+        extra.append(targets[:, :2])
     pts = np.concatenate([np.asarray(p, dtype=float)[:, :2] for p in positions] + extra)
     box = _view_box(pts, world, range_m, whole_world)
     aspect = float((box[1, 1] - box[0, 1]) / max(box[1, 0] - box[0, 0], 1e-9))
@@ -298,6 +318,9 @@ def snapshot(
             connected=None if connected is None else np.asarray(connected[c], dtype=bool),
         )
         panel.team(pos, links[c], fixed, colours, leader, z_span)
+        if targets is not None:
+            states = np.full(len(targets), OPEN) if target_states is None else target_states[c]
+            panel.targets(targets, np.asarray(states))
         style.label_axes(top, title=titles[c])
         if side is not None:
             top.set_anchor("S")  # down onto its side view
@@ -315,12 +338,18 @@ def snapshot(
         cb = fig.colorbar(img, ax=[t for t, _ in tops], fraction=0.04, pad=0.01, shrink=0.7)
         cb.set_label("obstacle height (m)")
     any_links = any(len(np.asarray(lk).reshape(-1, 2)) for lk in links)
+    if any_links and range_m is not None:
+        style.link_margin_colourbar(fig, ax=[t for t, _ in tops], fraction=0.03, pad=0.01,
+                                    shrink=0.6)  # fmt: skip
     handles = style.legend_handles(
         roles=role_map,
         leader=leader is not None,
         base_station=fixed is not None and len(fixed) > 0,
         exploration=connected is not None and roles is None,
         path=path is not None,
+        targets=targets is not None,
+        targets_finished=target_states is not None
+        and any(np.any(np.asarray(s) == FINISHED) for s in target_states),
         links=any_links,
         path_label=path_label,
         link_margins=range_m is not None,
@@ -366,12 +395,15 @@ def team_snapshot(
 ) -> Figure | None:
     """:func:`snapshot` of a :class:`tether.record.TrajectoryRecorder` at its first, middle
     and last recorded steps: roles and connection from its robot values, its fixed nodes
-    (a base station, and then the whole map is shown). None without recorded positions."""
+    (a base station, and then the whole map is shown), the targets its events record
+    (:mod:`tether.targets_recorded`). None without recorded positions."""
     if not recording.positions:
         return None
     n = len(recording.positions)
     idx = sorted({0, n // 2, n - 1})
     fixed = recording.fixed
+    dim = int(np.asarray(recording.positions[0]).shape[1])
+    marks = recorded_targets(getattr(recording, "events", ()), dim)
     return snapshot(
         [recording.positions[i] for i in idx],
         [recording.links[i] for i in idx],
@@ -386,4 +418,11 @@ def team_snapshot(
         title=title,
         whole_world=fixed is not None,
         path_label=path_label,
+        targets=None if marks is None else marks.positions_m,
+        target_states=None
+        if marks is None
+        else [
+            marks.states(recording.position_steps[i], recording.position_steps[i] * dt_s)
+            for i in idx
+        ],  # fmt: skip
     )

@@ -1,6 +1,6 @@
 """One look for every figure, animation and replay of tether.
 
-Colours are given once here and used by matplotlib (:mod:`tether.viz.animate`,
+Colours are given once here and used by matplotlib (:mod:`tether.viewing.animate`,
 figures), by the browser replay (:func:`palette` is embedded in the page) and by
 the ROS 2 export (marker colours), so a leader, a base station or a link about
 to break looks the same everywhere:
@@ -130,6 +130,20 @@ def link_margin(distance_m: np.ndarray, range_m: float) -> np.ndarray:
 def link_colours(margin: np.ndarray) -> np.ndarray:
     """RGBA ``(k, 4)`` for link margins in [0, 1] (see :data:`LINK_CMAP`)."""
     return colormap("LINK_CMAP")(np.clip(np.asarray(margin, dtype=float), 0.0, 1.0))
+
+
+def link_margin_colourbar(fig: Any, **where: Any) -> Any:
+    """A colour bar of link margin on ``fig`` (``where``: ``ax=``, ``cax=``, ...): red at
+    0 (a link at the range, about to break) through amber to green at 1 (robots close)."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    mappable = ScalarMappable(norm=Normalize(0.0, 1.0), cmap=colormap("LINK_CMAP"))
+    bar = fig.colorbar(mappable, **where)
+    bar.set_label("link margin, 1 - d / range", fontsize=8)
+    bar.set_ticks([0.0, 0.5, 1.0])
+    bar.ax.tick_params(labelsize=7)
+    return bar
 
 
 def role_colour_map(roles: Sequence[str]) -> dict[str, str]:
@@ -325,6 +339,7 @@ def legend_handles(
     base_station: bool = False,
     exploration: bool = False,
     targets: bool = False,
+    targets_finished: bool = False,
     path: bool = False,
     links: bool = True,
     unknown: bool = False,
@@ -364,6 +379,8 @@ def legend_handles(
         out.append(dot(BASE_STATION, "base station", marker="s", size=9))
     if targets:
         out.append(dot(TARGET, "target", marker="*", size=11))
+    if targets_finished:
+        out.append(dot("none", "target, reached or dropped", marker="*", size=11))
     if path:
         out.append(Line2D([], [], color=PATH, lw=1.5, ls="--", label=path_label))
     if trail:
@@ -388,6 +405,26 @@ def legend_handles(
     if boundary:
         out.append(Patch(fc="none", ec=OCCUPIED, lw=1.5, label="world boundary"))
     return out
+
+
+#: a legend with more entries than this, or a longer label, goes beside the plot
+LEGEND_INSIDE_ENTRIES = 4
+LEGEND_INSIDE_CHARS = 24
+
+
+def place_legend(ax: Any) -> Any:
+    """The legend of ``ax``: inside where it is small, else beside the plot (the figure,
+    in constrained layout, is widened for it), so it never covers the data."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not labels:
+        return None
+    longest = max(len(label) for label in labels)
+    if len(labels) <= LEGEND_INSIDE_ENTRIES and longest <= LEGEND_INSIDE_CHARS:
+        return ax.legend(fontsize=8)
+    fig = ax.figure
+    width, height = fig.get_size_inches()
+    fig.set_size_inches(width + 0.4 + 0.062 * longest, height)
+    return fig.legend(handles, labels, loc="outside right upper", fontsize=7, frameon=False)
 
 
 def palette() -> dict[str, Any]:

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from tether.viz.runfolder import RunData
+    from tether.viewing.runfolder import RunData
     from tether.world.grid import OccupancyGrid
 
 NEVER = np.iinfo(np.int32).max

@@ -205,11 +205,13 @@ class ReplayScene {
       bs.position.set(m.base_m[0][0], m.base_m[0][1], m.base_m[0][2] + lift);
       this.scene.add(bs);
     }
+    this.targets = [];
     for (const t of m.targets_m || []) {
       const g = new THREE.Mesh(new THREE.OctahedronGeometry(1.6 * this.rad),
         new THREE.MeshLambertMaterial({ color: hexColour(pal.target) }));
       g.position.set(t[0], t[1], t[2] + lift);
       this.scene.add(g);
+      this.targets.push(g);
     }
     if (m.planned_path_m) {
       const pts = m.planned_path_m.map((p) => new THREE.Vector3(p[0], p[1], p[2] + 0.02));
@@ -296,9 +298,26 @@ class ReplayScene {
     const from = Math.max(0, f - TRAIL_FRAMES);  // the last TRAIL_FRAMES frames of each trail
     this.trails.geometry.setDrawRange(from * n * 2, (f - from) * n * 2);
     if (A.map_first_seen) this.paintMap(f);
+    this.showTargets(f);
     if (this.follow) this.orbit.target.copy(this.centroid(f)), this.orbit.update();
     this.frame = f;
     this.dirty = true;
+  }
+
+  showTargets(f) {
+    // a target appears when it is added (or appears), and turns to a wireframe once reached
+    const when = this.run.meta.target_frames;
+    if (!when) return;
+    this.targets.forEach((g, k) => {
+      const [shown, done] = when[k];
+      g.visible = shown >= 0 && f >= shown;
+      g.material.wireframe = done >= 0 && f >= done;
+    });
+  }
+
+  targetStates() {
+    // per target: 0 hidden, 1 open, 2 reached or dropped (as drawn now)
+    return this.targets.map((g) => (!g.visible ? 0 : g.material.wireframe ? 2 : 1));
   }
 
   centroid(f) {

@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
+from tether.viewing.known import NEVER, first_seen
+from tether.viewing.runfolder import RunData, frame_indices
 from tether.viz import style
 from tether.viz.boxes import coarsen, obstacle_boxes
-from tether.viz.known import NEVER, first_seen
-from tether.viz.runfolder import RunData, frame_indices
 
 MISSING = 65535
 MAX_SERIES_POINTS = 20_000
@@ -246,6 +246,9 @@ def _meta(
         "base_m": pts(None if run.base_m is None else run.base_m[None, :]),
         "planned_path_m": pts(run.planned_path_m),
         "targets_m": pts(run.targets_m),
+        "target_frames": None
+        if run.targets is None
+        else run.targets.first_frames(run.frame_steps[shown], run.frame_times_s[shown]).tolist(),
         "extent_m": box.tolist(),
         "focus_m": focus.tolist(),
         "quant": {"lo": lo.tolist(), "scale": scale.tolist(), "missing": MISSING},

@@ -26,9 +26,11 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from PIL import Image  # noqa: E402
 
 from tether.errors import TetherError  # noqa: E402
+from tether.progress import progress_bar  # noqa: E402
+from tether.targets_recorded import FINISHED, HIDDEN  # noqa: E402
+from tether.viewing.known import first_seen  # noqa: E402
+from tether.viewing.runfolder import RunData, frame_indices, load_run  # noqa: E402
 from tether.viz import style  # noqa: E402
-from tether.viz.known import first_seen  # noqa: E402
-from tether.viz.runfolder import RunData, frame_indices, load_run  # noqa: E402
 
 DEFAULT_FPS = 10.0
 DEFAULT_DURATION_S = 20.0
@@ -108,15 +110,19 @@ class _Painter:
             cb = self.fig.colorbar(self.map_img, cax=cax)
             cb.set_label("obstacle height (m)", fontsize=8)
             cb.ax.tick_params(labelsize=7)
+        if len(run.link_pairs):  # beside the height bar, if there is one
+            left = 0.55 if run.grid is not None and run.grid.dim == 3 else 0.0
+            style.link_margin_colourbar(self.fig, cax=legend_ax.inset_axes((left, 0.06, 0.12, 0.3)))
         ax.set_xlim(box[0, 0], box[1, 0])
         ax.set_ylim(box[0, 1], box[1, 1])
         overlays = []  # drawn with the moving artists, in z order, over a changing map
         if run.planned_path_m is not None:
             p = run.planned_path_m
             overlays += ax.plot(p[:, 0], p[:, 1], ls="--", color=style.PATH, lw=1.4, zorder=2)
+        self.target_dots = None
         if run.targets_m is not None:
             g = run.targets_m
-            target = ax.scatter(
+            self.target_dots = ax.scatter(
                 g[:, 0],
                 g[:, 1],
                 marker="*",
@@ -125,7 +131,7 @@ class _Painter:
                 edgecolors=style.ROBOT_EDGE,
                 zorder=5,
             )
-            overlays.append(target)
+            overlays.append(self.target_dots)
         if run.base_m is not None:
             base = ax.scatter(
                 [run.base_m[0]],
@@ -177,6 +183,8 @@ class _Painter:
             base_station=run.base_m is not None,
             exploration=run.connected is not None and roles is None,
             targets=run.targets_m is not None,
+            targets_finished=run.targets is not None
+            and bool(np.any(run.targets.finished_steps >= 0)),
             path=run.planned_path_m is not None,
             links=len(run.link_pairs) > 0,
             unknown=self.first_seen is not None,
@@ -255,6 +263,8 @@ class _Painter:
             )
             self.side_links.set_colors(link_rgba)
         t = float(run.frame_times_s[k])
+        if run.targets is not None and self.target_dots is not None:
+            self._show_targets(int(run.frame_steps[k]), t)
         self.title.set_text(f"{run.name}: t = {t:.1f} s (step {int(run.frame_steps[k])})")
         if self.cursor is not None:
             self.cursor.set_xdata([t, t])
@@ -265,6 +275,14 @@ class _Painter:
         buf = np.asarray(self.fig.canvas.buffer_rgba())
         return np.ascontiguousarray(buf[:, :, :3])
 
+    def _show_targets(self, step: int, t_s: float) -> None:
+        """Targets added by now: filled while open, hollow once reached or dropped."""
+        states = self.run.targets.states(step, t_s)
+        shown = states != HIDDEN
+        self.target_dots.set_offsets(self.run.targets_m[shown, :2])
+        face = np.where(states[shown] == FINISHED, "none", style.TARGET)
+        self.target_dots.set_facecolors(face.tolist())
+
     def close(self) -> None:
         plt.close(self.fig)
 
@@ -274,11 +292,8 @@ def _frames(painter: _Painter, shown: np.ndarray, progress: bool) -> Iterator[np
         for k in shown:
             yield painter.draw(int(k), shown)
         return
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
-
-    columns = ("{task.description}", BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, transient=True) as bar:
-        task = bar.add_task("drawing frames", total=len(shown))
+    with progress_bar("drawing frames") as bar:
+        task = bar.add_task("animate", total=len(shown))
         for k in shown:
             yield painter.draw(int(k), shown)
             bar.advance(task)

@@ -10,6 +10,8 @@ not" rather than against one strategy's files:
 * ``links.parquet`` (optional) ``step, i, j`` with an optional ``weight``; an index
   equal to ``n_robots`` is the base station, at ``summary.json["base_m"]``;
 * ``steps.parquet`` any per-step columns (``lambda2``, ``n_links``, ...);
+* ``events.parquet`` (optional): the targets the run used
+  (:mod:`tether.targets_recorded`), else those the scenario lists (goals);
 * ``scenario.yaml`` rebuilds the world (the occupancy grid) with the scenario's
   seed, the same way the runner does; a world that cannot be rebuilt (a map file
   that moved) is reported in :attr:`RunData.notes` and the run is shown without it.
@@ -23,9 +25,17 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from tether.errors import TetherError
+from tether.targets_recorded import (
+    TARGET_ADDED,
+    TARGET_FINISHED,
+    RecordedTargets,
+    recorded_targets,
+)
 
 _POSITION_COLUMNS = ("x_m", "y_m", "z_m")
 
@@ -57,6 +67,7 @@ class RunData:
     leader: int | None = None
     planned_path_m: np.ndarray | None = None  # (k, dim)
     targets_m: np.ndarray | None = None  # (k, dim)
+    targets: RecordedTargets | None = None  # with when each was added and finished
     grid: Any = None  # tether.world.grid.OccupancyGrid or None
     bounds_m: np.ndarray | None = None  # (2, dim) of the world, if known
     notes: list[str] = field(default_factory=list)
@@ -165,20 +176,46 @@ def _range_m(scenario: Any, params: Any) -> float:
 
 
 def _path_and_targets(scenario: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The leader's waypoints and the goals a scenario lists (targets a strategy generates
+    are read from the run's events instead)."""
     if scenario is None:
         return None, None
     p = scenario.strategy.params
     path = None
     traj = p.get("trajectory")
     if isinstance(traj, dict) and traj.get("waypoints"):
-        path = np.asarray(traj["waypoints"], dtype=float)
+        path = _points(traj["waypoints"])
     targets = None
     ext = p.get("external")
     if isinstance(ext, dict) and ext.get("kind") == "goal" and ext.get("goals"):
-        targets = np.asarray(ext["goals"], dtype=float)
-    if p.get("targets"):
-        targets = np.asarray(p["targets"], dtype=float)
+        targets = _points(ext["goals"])
     return path, targets
+
+
+def _points(value: Any) -> np.ndarray | None:
+    """``(k, d)`` floats from a list of points, ``None`` for anything else."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return arr if arr.ndim == 2 and len(arr) and np.all(np.isfinite(arr)) else None
+
+
+def _recorded_targets(path: Path, dim: int) -> RecordedTargets | None:
+    file = path / "events.parquet"
+    if not file.exists():
+        return None
+    try:
+        table = pq.read_table(file)
+    except Exception as exc:  # pyarrow raises several types for corrupt files
+        raise RunFolderError(f"{file}: cannot read Parquet file ({exc})") from None
+    names = table.schema.names
+    if "kind" not in names or "position_m" not in names:
+        return None
+    kinds = pa.array([TARGET_ADDED, *TARGET_FINISHED])
+    table = table.filter(pc.is_in(table["kind"], value_set=kinds))
+    keep = [c for c in ("step", "kind", "robot", "target", "position_m", "appear_s") if c in names]
+    return recorded_targets(table.select(keep).to_pylist(), dim)
 
 
 def _leader(scenario: Any, path: np.ndarray | None, positions: np.ndarray) -> int | None:
@@ -246,6 +283,9 @@ def load_run(path: str | Path, *, world: bool = True) -> RunData:
     offsets, pairs, weights = _links(path, frame_steps, n + (base_m is not None))
     params = _strategy_params(scenario) if scenario is not None else None
     planned, targets = _path_and_targets(scenario)
+    recorded = _recorded_targets(path, dim)
+    if recorded is not None:
+        targets = recorded.positions_m
     dt_s = float(scenario.sim.dt_s) if scenario is not None else 1.0
     data = RunData(
         path=path,
@@ -266,6 +306,7 @@ def load_run(path: str | Path, *, world: bool = True) -> RunData:
         base_m=base_m,
         planned_path_m=planned,
         targets_m=targets,
+        targets=recorded,
     )
     data.leader = _leader(scenario, planned, positions)
     if world and scenario is not None:

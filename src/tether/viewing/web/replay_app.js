@@ -209,6 +209,7 @@ async function main() {
       return out;
     },
     unknownCells: () => (scene && scene.mapPixels ? scene.unknownCells : null),
+    targetStates: () => (scene ? scene.targetStates() : []),
   });
   show(0);
   window.tether.ready = true;

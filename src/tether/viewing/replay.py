@@ -1,8 +1,8 @@
 """``tether view``: one self-contained HTML file replaying a run in 3-D.
 
 Everything the page needs is inside it: three.js r170 (vendored in
-``tether/viz/vendor``, inlined as a classic script), the replay's own scripts
-and the run's data (:mod:`tether.viz.payload`). A Content-Security-Policy of
+``tether/viewing/vendor``, inlined as a classic script), the replay's own scripts
+and the run's data (:mod:`tether.viewing.payload`). A Content-Security-Policy of
 ``default-src 'none'`` forbids the page from fetching anything, so it opens
 from ``file://`` offline and cannot call home. Why three.js rather than
 plotly: see ``docs/viewing.md``.
@@ -15,6 +15,7 @@ import html
 import http.server
 import json
 import re
+import signal
 import threading
 import time
 from dataclasses import dataclass
@@ -24,8 +25,9 @@ from pathlib import Path
 from typing import Any
 
 from tether.errors import TetherError
-from tether.viz.payload import build_payload
-from tether.viz.runfolder import RunData, load_run
+from tether.interrupts import Stopped
+from tether.viewing.payload import build_payload
+from tether.viewing.runfolder import RunData, load_run
 
 #: A 35-robot run of 10,000 steps must stay under 10 MB; the default aims lower.
 DEFAULT_BUDGET_BYTES = 8_000_000
@@ -42,7 +44,7 @@ class Replay:
 
 
 def _resource(*parts: str) -> str:
-    return resources.files("tether.viz").joinpath(*parts).read_text(encoding="utf-8")
+    return resources.files("tether.viewing").joinpath(*parts).read_text(encoding="utf-8")
 
 
 @lru_cache(maxsize=1)
@@ -51,10 +53,12 @@ def three_script() -> str:
     src = _resource("vendor", "three.module.min.js")
     digest = hashlib.sha256(src.encode("utf-8")).hexdigest()
     if digest != THREE_SHA256:
-        raise TetherError(f"tether/viz/vendor/three.module.min.js: unexpected content ({digest})")
+        raise TetherError(
+            f"tether/viewing/vendor/three.module.min.js: unexpected content ({digest})"
+        )
     match = re.search(r"export\s*\{([^}]*)\}\s*;?\s*$", src)
     if match is None:
-        raise TetherError("tether/viz/vendor/three.module.min.js: not a one-file module build")
+        raise TetherError("tether/viewing/vendor/three.module.min.js: not a one-file module build")
     names = []
     for item in match.group(1).split(","):
         local, _, exported = item.strip().partition(" as ")
@@ -159,6 +163,9 @@ def serve(path: str | Path, port: int = 0, *, announce: Any = print) -> None:
             thread.join(0.5)
     except KeyboardInterrupt:
         pass
+    except Stopped as stop:  # Ctrl-C is how serving ends; SIGTERM stops the command
+        if stop.signum != signal.SIGINT:
+            raise
     finally:
         server.shutdown()
         server.server_close()

@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tether.viz.runfolder import load_run
+from tether.viewing.runfolder import load_run
 
 
 def _mb(n_bytes: int) -> str:
@@ -25,7 +25,7 @@ def animate_command(
     say: Any,
     progress: bool = True,
 ) -> Path:
-    from tether.viz.animate import animate
+    from tether.viewing.animate import animate
 
     result = animate(
         run_dir,
@@ -55,8 +55,8 @@ def view_command(
     say: Any,
 ) -> Path:
     from tether.errors import TetherError
-    from tether.viz.replay import serve as serve_file
-    from tether.viz.replay import write_replay
+    from tether.viewing.replay import serve as serve_file
+    from tether.viewing.replay import write_replay
 
     if max_mb <= 0:
         raise TetherError(f"--max-mb: must be positive (got {max_mb})")
@@ -76,14 +76,12 @@ def view_command(
 
 
 def export_command(run_dir: Path, out: Path | None, *, fmt: str, say: Any) -> Path:
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
-
     from tether.export.ros2 import export
+    from tether.progress import progress_bar
 
     run = load_run(run_dir)
-    columns = ("{task.description}", BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, transient=True) as bar:
-        task = bar.add_task("writing steps", total=run.n_frames)
+    with progress_bar("writing steps") as bar:
+        task = bar.add_task("export", total=run.n_frames)
         result = export(run, out, fmt=fmt, progress=lambda k: bar.advance(task, k))
     total = sum(result.messages.values())
     say(
