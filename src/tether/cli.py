@@ -170,7 +170,11 @@ def run(
         "min_lambda2_weighted",
         "min_robot_distance_m",
         "min_obstacle_clearance_m",
-        "rejected_substeps",
+        "controller_success",
+        "safe_set_exits",
+        "guard_interventions",
+        "max_speed_mps",
+        "targets_reached",
     ]
     for k in keys:
         if s.get(k) is not None:  # None: not measured in this run (no obstacles, ...)
