@@ -159,17 +159,16 @@ def run_deadlock(max_steps: int, **params: Any) -> tuple[dict, TrajectoryRecorde
     return out, recorder, dist
 
 
-def test_helpers_break_a_town_deadlock_that_holds_without_them() -> None:
-    """A prime held at a roof edge by one link (Fig. 9 town, N = 25, seed 7 at 240 s)."""
-    off, _, dist_off = run_deadlock(900, help_after_s=None, stall_timeout_s=None)
-    assert off["targets_reached"] == 0 and off["targets_dropped"] == 0
-    last_30_s = dist_off[-30:]  # positions are recorded every 10 steps (1 s)
-    assert last_30_s.min() > 1.8  # never within Rz in 90 s, ...
-    assert abs(last_30_s[-1] - last_30_s[0]) < 0.5  # ... and no longer getting closer
-    on, rec, _ = run_deadlock(900)
-    assert on["targets_reached"] == 1 and on["completion_time_s"] < 90.0
-    assert on["connected_all_steps"] and on["min_lambda2_weighted"] > 0
-    assert on["collisions"] == 0
+def test_helpers_bring_a_prime_held_at_a_roof_edge_to_its_target_sooner() -> None:
+    """A prime held at a roof edge by one link (a Fig. 9 town team). Without helpers it
+    gets there on its own (the stable integrator; the old one stalled here for good);
+    with helpers asked after 5 s of stall it gets there sooner, every invariant kept."""
+    off, _, _ = run_deadlock(500, help_after_s=None, stall_timeout_s=None)
+    assert off["targets_reached"] == 1 and off["help_requests"] == 0
+    on, rec, _ = run_deadlock(500, help_after_s=5.0)
+    assert on["targets_reached"] == 1
+    assert on["completion_time_s"] < off["completion_time_s"] - 5.0
+    assert on["connected_all_steps"] and on["collisions"] == 0 and on["controller_success"]
     asked = [e for e in rec.events if e["kind"] == "help_requested"]
     assert asked and all(e["robot"] == 7 for e in asked)
     assert on["help_requests"] >= 1 and on["helper_robot_s"] > 0
@@ -181,7 +180,7 @@ def test_helpers_move_the_same_with_the_compiled_sub_step_and_without() -> None:
     runs = []
     for on in (True, False):
         with jit.using(on):
-            metrics, rec, _ = run_deadlock(300)  # the first request: steps 268-274
+            metrics, rec, _ = run_deadlock(160, help_after_s=5.0)  # the request: step 105
         runs.append((metrics, np.array(rec.positions)))
     (m_on, q_on), (m_off, q_off) = runs
     assert m_on["helper_robot_s"] > 0 and m_on["help_requests"] == 1
@@ -189,16 +188,16 @@ def test_helpers_move_the_same_with_the_compiled_sub_step_and_without() -> None:
 
 
 def test_help_lambda_factor_scales_only_the_helpers_force_the_same_compiled_or_not() -> None:
-    """``help_lambda_factor``: nothing changes before the first request (steps 268-274);
-    then the helpers move differently, lambda2 stays above 0, and the fused sub-step
-    (kernels on) applies the factor exactly as the reference does."""
+    """``help_lambda_factor``: nothing changes before the first request; then the helpers
+    move differently, lambda2 stays above 0, and the fused sub-step (kernels on) applies
+    the factor exactly as the reference does."""
     pytest.importorskip("numba")
     with jit.using(True):
-        _, base, _ = run_deadlock(300)
+        _, base, _ = run_deadlock(160, help_after_s=5.0, help_lambda_factor=None)
     runs = []
     for on in (True, False):
         with jit.using(on):
-            metrics, rec, _ = run_deadlock(300, help_lambda_factor=0.1)
+            metrics, rec, _ = run_deadlock(160, help_after_s=5.0, help_lambda_factor=0.1)
         runs.append((metrics, np.array(rec.positions)))
     (m_on, q_on), (m_off, q_off) = runs
     np.testing.assert_array_equal(q_on, q_off)
