@@ -71,3 +71,24 @@ def test_the_old_safeguard_key_says_what_replaced_it() -> None:
     sc.strategy.params["safeguard"] = True
     with pytest.raises(ScenarioError, match="guard: detect"):
         build(sc)
+
+
+def test_the_sweep_report_counts_the_controller_s_successes_per_combination(tmp_path) -> None:
+    """Exact lambda2 keeps the office team in its safe set; one estimator round per
+    sub-step does not: the report must tell the two combinations apart."""
+    from tether.experiments.report import write_report
+    from tether.experiments.sweep import run_sweep
+
+    sc = load_scenario("connectivity_office")
+    sc.sim.max_steps = 20
+    sc.strategy.params["estimator"].update(rounds_per_substep=1, warmup_rounds=10)
+    sc.sweep = {"strategy.params.eigensolver": ["exact", "estimator"]}
+    run_sweep(sc, tmp_path / "sweep", seeds=1)
+    text = write_report(tmp_path / "sweep").read_text()
+    table = text[text.index("## Controller success") : text.index("## Figures")]
+    rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+            for line in table.splitlines() if "eigensolver" in line}  # fmt: skip
+    exact = next(v for k, v in rows.items() if "exact" in k)
+    estimator = next(v for k, v in rows.items() if "estimator" in k)
+    assert exact[:4] == ["1", "1", "0", "0"] and estimator[:4] == ["1", "0", "1", "0"]
+    assert estimator[4] == "1"  # the trial with safe-set exits

@@ -148,6 +148,28 @@ def _constants(results: SweepResults) -> list[str]:
     return [*lines, ""]
 
 
+def _controller(results: SweepResults) -> list[str]:
+    """Per combination, the trials the controller alone kept in its safe set (the
+    ``connectivity`` and ``multi_target`` strategies' ``controller_success``)."""
+    if not any("controller_success" in row for row in results.done):
+        return []
+    lines = ["## Controller success", "",
+             "A trial is a success of the controller when its invariants held without the "
+             "guard's help: no guard intervention, no sub-step outside the safe set, the "
+             "integrator's step rules met (`controller_success`; not measured with the "
+             "guard off).", "",
+             "| combination | trials | successes | not successes | not measured | "
+             "with safe-set exits | with guard interventions |",
+             "|---|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for label, rows in _groups(results).items():
+        flags = [row.get("controller_success") for row in rows]
+        exits = sum(1 for row in rows if (row.get("safe_set_exits") or 0) > 0)
+        guard = sum(1 for row in rows if (row.get("guard_interventions") or 0) > 0)
+        lines.append(f"| {label} | {len(rows)} | {flags.count(True)} | {flags.count(False)} | "
+                     f"{flags.count(None)} | {exits} | {guard} |")  # fmt: skip
+    return [*lines, ""]
+
+
 def _header(results: SweepResults, command: str) -> list[str]:
     done, failed = results.done, results.failed
     seeds = sorted({r["seed"] for r in results.rows if r.get("seed") is not None})
@@ -204,6 +226,7 @@ def write_report(sweep_dir: str | Path, command: str | None = None) -> Path:
                          f"| {error} |")  # fmt: skip
         lines.append("")
     if results.done:
+        lines += _controller(results)
         drawn = _axis_figures(results, figures) + _time_figures(results, figures)
         lines += ["## Figures", ""]
         for caption, path in drawn:
