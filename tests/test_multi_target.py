@@ -233,3 +233,59 @@ def test_a_stalled_prime_plans_its_path_again_from_where_it_is(replan_s: float |
                 dropped = (e["t_s"], e["reason"])
     assert dropped is not None and dropped[1] == "stalled" and 60.0 < dropped[0] < 60.2
     assert replans == ([] if replan_s is None else [20.0, 40.0, 60.0])
+
+
+def test_a_dropped_target_ends_the_mission_and_is_counted_not_hidden() -> None:
+    """``completion_time_s`` is when every target is reached or dropped (an expired one
+    here); ``targets_dropped`` and ``targets_pending`` say what it cost."""
+    queues = [
+        {"robot": 0, "targets": [[2.5, 12.5, 1.2]], "stay_s": 1.0},
+        {"robot": 1, "targets": [[2.05, 11.85, 1.0]], "stay_s": 1.0, "timeout_s": 0.5},
+    ]
+    data = {"name": "drop", "seed": 1,
+            "world": {"scene": "office", "dim": 3, "params": {"resolution_m": 0.1, "seed": 0}},
+            "sensing": {"range_m": 2.5}, "team": {"n_robots": 6},
+            "sim": {"dt_s": 0.1, "max_steps": 600},
+            "strategy": {"name": "multi_target", "params": {
+                "preset": "office", "start": {"center_m": [2.05, 11.85, 1.2]},
+                "targets": {"kind": "fixed", "params": {"queues": queues}}}}}  # fmt: skip
+    b = build(scenario_from_dict(data, "drop.yaml"))
+    r = simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=0.1, max_steps=600, rng=b.rng)
+    m = r.strategy_metrics
+    assert (m["targets_total"], m["targets_reached"], m["targets_dropped"]) == (2, 1, 1)
+    assert m["targets_pending"] == 0
+    assert m["completion_time_s"] == pytest.approx(r.sim_time_s) and r.steps < 600
+    b = build(scenario_from_dict(data, "drop.yaml"))
+    r = simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=0.1, max_steps=3, rng=b.rng)
+    assert r.strategy_metrics["completion_time_s"] is None
+    assert r.strategy_metrics["targets_pending"] >= 1
+
+
+def test_no_prime_vacancy_outlasts_a_result_flood(trials: list[Path]) -> None:
+    """Sec. 3.3: after an election no prime exists only until the result reaches the
+    winner, at most ``N - 1`` rounds (one round per step; the lossless trials)."""
+    for path in trials[::2]:
+        s = json.loads((path / "summary.json").read_text())
+        assert s["elections"] >= 3
+        assert s["longest_prime_vacancy_steps"] <= s["n_robots"] - 1, path
+
+
+def test_lambda_p_is_defined_only_while_a_prime_travels(trials: list[Path]) -> None:
+    """``prime_efficiency`` (Lambda_p, eq. (12)) is a number exactly when a prime exists
+    and has a path; no prime, or one holding at its target, pins nothing."""
+    for path in trials:
+        steps = pq.read_table(path / "steps.parquet").to_pydict()
+        prime = np.asarray(steps["prime"])
+        eff = np.asarray(steps["prime_efficiency"], dtype=float)
+        assert np.all(np.isnan(eff[prime < 0]))
+        assert np.isfinite(eff[prime >= 0]).mean() > 0.2  # elections hold primes at targets
+        assert np.all((eff[np.isfinite(eff)] >= 0) & (eff[np.isfinite(eff)] <= 1))
+
+
+def test_the_experiment_preset_has_the_paper_s_consensus_gain() -> None:
+    """Sec. 4.2: "We chose k_Lambda = 1"; the simulation presets keep the faster 5."""
+    from tether.continuous.multi_target_params import MultiTargetParams
+
+    assert MultiTargetParams(preset="experiment").k_lambda_per_s == 1.0
+    assert MultiTargetParams(preset="outdoor").k_lambda_per_s == 5.0
+    assert MultiTargetParams(preset="experiment", k_lambda_per_s=3.0).k_lambda_per_s == 3.0
