@@ -224,12 +224,17 @@ def test_max_steps_bounds_the_run(tmp_path: Path) -> None:
 
 
 @effect("sim.collision_distance_m")
-def test_collision_distance_counts_close_pairs() -> None:
+def test_collision_distance_counts_close_pairs(tmp_path: Path) -> None:
     pts = {"kind": "positions", "positions": [[0, 0], [1.0, 0], [6, 0]]}
     base = changed(SILENT, team__n_robots=3, team__init=pts, sim__max_steps=1)
     near = ran(changed(base, sim__collision_distance_m=0.5)).result.records[0]
     far = ran(changed(base, sim__collision_distance_m=1.5)).result.records[0]
     assert (near.collisions, far.collisions) == (0, 1)
+    for distance, at_start in ((0.5, 0), (1.5, 1)):  # through `tether run`'s path
+        out = run(
+            changed(base, sim__collision_distance_m=distance), out_dir=tmp_path / str(distance)
+        )
+        assert pq.read_table(out.path / "steps.parquet")["collisions"][0].as_py() == at_start
 
 
 # -- strategy ------------------------------------------------------------------------------

@@ -152,7 +152,9 @@ def test_signal_parameters_set_the_reach(name: str) -> None:
 @BOTH
 @effect(*shared("failures.at_s"))
 def test_a_robot_fails_at_its_time(name: str) -> None:
-    r = explore(name, 20, failures={"at_s": {1: 6.0}})
+    data = changed(EXPLORE, strategy__name=name, sim__dt_s=2.0, sim__max_steps=12)
+    data["strategy"]["params"]["failures"] = {"at_s": {1: 12.0}}  # step 6 of 2 s
+    r = ran(data)
     q = r.positions[:, 1]
     assert np.linalg.norm(np.diff(q[6:], axis=0), axis=1).max() == 0  # stopped from step 6
     assert r.metrics["failures"] == [{"robot": 1, "step": 6}]

@@ -106,13 +106,13 @@ def test_a_wider_goal_tolerance_ends_the_run_sooner() -> None:
 
 @effect("silent:max_speed_mps")
 def test_max_speed_caps_every_step() -> None:
-    for cap in (0.3, 0.8):
-        r = ran(changed(TEAM, strategy__params__max_speed_mps=cap), max_steps=10)
+    for cap in (0.3, 0.8):  # m/s, with 0.5 s steps
+        r = ran(changed(TEAM, sim__dt_s=0.5, strategy__params__max_speed_mps=cap), max_steps=10)
         step = np.linalg.norm(np.diff(r.positions, axis=0), axis=2)
-        assert step.max() <= cap * 1.0 + 1e-9
-        assert step.max() > 0.9 * cap
-    free = ran(TEAM, max_steps=10)
-    assert np.linalg.norm(np.diff(free.positions, axis=0), axis=2).max() > 1.0
+        assert step.max() <= cap * 0.5 + 1e-9
+        assert step.max() > 0.9 * cap * 0.5
+    free = ran(changed(TEAM, sim__dt_s=0.5), max_steps=10)
+    assert np.linalg.norm(np.diff(free.positions, axis=0), axis=2).max() > 0.5
 
 
 @effect("silent:min_separation_m")
