@@ -169,6 +169,8 @@ def test_replay_known_map_appears_at_the_frame_it_is_seen(explore_run: Path, tmp
     grid, range_m = grid_of(explore_run)
     world = meta["world"]
     assert world["kind"] == "map" and world["cell_m"] == grid.resolution_m
+    assert (world["nx"], world["ny"]) == grid.occupied.shape
+    np.testing.assert_array_equal(arrays["map_occupied"].T == 1, grid.occupied)  # rows along y
     first = arrays["map_first_seen"].T  # (nx, ny), frame index (uint32 max: never)
     assert first.shape == grid.occupied.shape
     _, pos = recorded(explore_run)
