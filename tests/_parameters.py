@@ -3,10 +3,11 @@
 :func:`scenario_parameters` walks :class:`tether.config.Scenario` and the ``Params`` model
 of every built-in strategy. Each parameter must have an effect test (registered with
 :func:`effect` in a ``test_parameter_effects*.py`` module), a declared reason why setting
-it cannot change a run (:data:`NO_EFFECT`), or sit in :data:`PENDING_STRATEGY_PARAMS`;
-``test_parameter_effects.py`` fails on a parameter that has none, so a new parameter
-needs its test. Keys: ``sim.dt_s`` for the scenario, ``silent:trajectory.speed_mps``
-for a strategy's parameters.
+it cannot change a run (:data:`NO_EFFECT`), or belong to one of :data:`PENDING_STRATEGIES`
+(listed by :func:`pending` until its test is written); ``test_parameter_effects.py``
+fails on a parameter that has none, so a new parameter needs its test. Keys: ``sim.dt_s``
+for the scenario, ``silent:trajectory.speed_mps`` for a strategy's parameters. The lead
+fills the pending ones: an :func:`effect` test for a parameter takes it off the list.
 """
 
 from __future__ import annotations
