@@ -14,13 +14,11 @@ import re
 import sys
 from pathlib import Path
 
+import tomllib
+
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "tether"
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # the test extra installs tomli on Python 3.10 (tomllib's origin, the same API)
-    import tomli as tomllib
 
 
 def _normal(name: str) -> str:
