@@ -20,7 +20,6 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "tether"
 
 
-
 def _normal(name: str) -> str:
     return re.sub(r"[-_.]+", "-", name).lower()
 
