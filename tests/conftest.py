@@ -1,8 +1,20 @@
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-import pytest
+# Which path a test runs is never left to chance: ``TETHER_JIT=auto`` (the library's
+# default) switches to the compiled kernels after two seconds if numba's cache is warm,
+# so a test would run one path or the other by the machine's history. Unless the caller
+# pins it (``TETHER_JIT=1 pytest`` runs every test compiled), tests and the commands
+# they start run the numpy reference; tests of the kernels pin their path with
+# ``tether.jit.using`` and compare it with the reference (test_jit_paths.py, test_kernels.py).
+if os.environ.get("TETHER_JIT", "").strip().lower() not in ("0", "off", "1", "on"):
+    os.environ["TETHER_JIT"] = "0"
+
+import pytest  # noqa: E402
+
+from tether import jit  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_MAPS = ROOT.parent / "shared" / "maps"
@@ -29,3 +41,10 @@ def skip_without_shared_map():
             pytest.skip(f"{path} not found (the shared maps are test data outside the package)")
 
     return check
+
+
+@pytest.fixture(autouse=True)
+def _path_restored():
+    """A test that pins the path with ``jit.set_enabled`` does not pin it for the next."""
+    yield
+    jit.set_enabled(None)

@@ -13,6 +13,7 @@ import pytest
 from matplotlib.colors import to_rgb
 from PIL import Image
 
+from _tools import skip_unless_required
 from tether.config import load_scenario
 from tether.errors import TetherError
 from tether.runner import run
@@ -64,7 +65,7 @@ def test_stride_and_mp4(silent, tmp_path):
     a = animate(silent, tmp_path / "s.gif", stride=10, progress=False)
     assert a.n_frames == 5  # steps 0, 10, 20, 30, 40
     if shutil.which("ffmpeg") is None:
-        pytest.skip("ffmpeg not installed: MP4 not tested")
+        skip_unless_required("ffmpeg not installed: MP4 not tested")
     m = animate(silent, tmp_path / "m.mp4", stride=4, fps=5, progress=False)
     assert m.format == "mp4" and m.n_frames == 11
     head = m.path.read_bytes()[:12]

@@ -11,6 +11,13 @@ check, with oracles independent of the strategy's own bookkeeping:
 * no robot is closer than ``Ro`` to an obstacle point, and no link with a
   positive weight has a line of sight closer than ``Ro`` to an obstacle
   point (exact point-segment distances to every obstacle point nearby).
+
+The first violation fails the test at once, naming the scene, the seed and the step,
+so a broken force shows as one failing step, not as the whole block run to the end. A
+force that pushes the team apart is kept safe by the integrator's guard, but only by
+ever smaller steps (a run that never ends): every block first needs the force alone to
+raise lambda2 of a stretched chain (both paths, compiled and reference), and fails at
+once when it does not.
 """
 
 from __future__ import annotations
@@ -21,6 +28,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from tether import jit
+from tether.continuous.params import ConnectivityParams
 from tether.continuous.placement import safe_team
 from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
 from tether.continuous.weights import compute_weights
@@ -89,15 +98,66 @@ def check_invariants(
     return out
 
 
+def lambda2_under_the_force_alone(on: bool) -> list[float]:
+    """lambda2 of a stretched 4-robot chain (4.5 m links, R's = 2.5 m) over 5 steps
+    of the connectivity force alone (no external force), kernels ``on`` or off."""
+    world = World(dim=2)
+    p = ConnectivityStrategyParams()
+    c = p.connectivity()
+    rng = np.random.default_rng(0)
+    state = TeamState.at_rest(np.array([[0.0, 0.0], [4.5, 0.0], [9.0, 0.0], [13.5, 0.0]]))
+    with jit.using(on):
+        strategy = ConnectivityStrategy(p)
+        strategy.reset(world, state, rng)
+        out = [compute_weights(state.positions, c, None).fiedler()[0]]
+        for k in range(5):
+            state = strategy.step(StepContext(k, k * DT_S, DT_S, world, state, None, rng))
+            out.append(compute_weights(state.positions, c, None).fiedler()[0])
+    return out
+
+
+def force_problems() -> list[str]:
+    """Empty when the force alone raises lambda2 at every step, both ways."""
+    problems = []
+    for on in (False, True):
+        lam = lambda2_under_the_force_alone(on)
+        if not all(b > a for a, b in zip(lam, lam[1:], strict=False)):
+            path = "compiled" if on else "reference"
+            problems.append(f"{path} path: lambda2 {[round(x, 4) for x in lam]} does not rise")
+    return problems
+
+
+@pytest.fixture(scope="module")
+def force_holds_the_team() -> None:
+    """Fails every dependent test at once when the force does not pull the team together."""
+    problems = force_problems()
+    if problems:
+        pytest.fail("the connectivity force alone does not raise lambda2: " + "; ".join(problems))
+
+
+@pytest.mark.parametrize("on", [False, True])
+def test_the_force_alone_raises_lambda2_of_a_stretched_chain(on: bool) -> None:
+    lam = lambda2_under_the_force_alone(on)
+    assert all(b > a for a, b in zip(lam, lam[1:], strict=False)), lam
+
+
+def assert_invariants(m: dict[str, float], c: ConnectivityParams, where: str) -> None:
+    """Fail with the place (scene, seed, step) and the margins at the first violation."""
+    assert m["lambda2"] > c.lambda2_min, f"{where}: lambda2 {m['lambda2']:.3g} <= lambda2_min"
+    assert m["distance"] > c.rc_m, f"{where}: robots {m['distance']:.3g} m apart < Rc {c.rc_m}"
+    assert m["clearance"] > c.ro_m, f"{where}: a robot {m['clearance']:.3g} m from an obstacle"
+    assert m["los"] > c.ro_m, f"{where}: a line of sight {m['los']:.3g} m from an obstacle"
+
+
 @pytest.mark.parametrize("block", range(SEEDS_PER_SCENE // BLOCK))
 @pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.usefixtures("force_holds_the_team")
 def test_random_pulls_keep_the_invariants(name: str, block: int) -> None:
     world = scene(name)
     p = params(name)
     c = p.connectivity()
     pts = world.obstacle_points
     tree = cKDTree(pts) if len(pts) else None
-    worst = {"lambda2": np.inf, "distance": np.inf, "clearance": np.inf, "los": np.inf}
     stretched = 0
     for seed in range(block * BLOCK, (block + 1) * BLOCK):
         rng = np.random.default_rng(seed)
@@ -106,17 +166,13 @@ def test_random_pulls_keep_the_invariants(name: str, block: int) -> None:
         strategy = ConnectivityStrategy(p)
         state = TeamState.at_rest(q0)
         strategy.reset(world, state, rng)
+        assert_invariants(check_invariants(q0, name, tree, p), c, f"{name} seed {seed} start")
         for k in range(STEPS):
             state = strategy.step(StepContext(k, k * DT_S, DT_S, world, state, None, rng))
             m = check_invariants(state.positions, name, tree, p)
-            for key in worst:
-                worst[key] = min(worst[key], m[key])
+            assert_invariants(m, c, f"{name} seed {seed} step {k}")
         d = np.linalg.norm(state.positions[:, None] - state.positions[None], axis=-1)
         stretched += int(d.max() > 2 * c.rs_inner_m)
-    assert worst["lambda2"] > c.lambda2_min, worst
-    assert worst["distance"] > c.rc_m, worst
-    assert worst["clearance"] > c.ro_m, worst
-    assert worst["los"] > c.ro_m, worst
     assert stretched > 0  # the pulls did pull the teams apart
 
 

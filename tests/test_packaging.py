@@ -14,12 +14,10 @@ import re
 import sys
 from pathlib import Path
 
-import pytest
+import tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "tether"
-
-tomllib = pytest.importorskip("tomllib")
 
 
 def _normal(name: str) -> str:

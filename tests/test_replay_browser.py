@@ -15,6 +15,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+from _tools import skip_unless_required
 from _viewing_helpers import make_run_folder
 from tether.viewing.replay import write_replay
 
@@ -42,7 +43,7 @@ def _chromium() -> str | None:
 def browser():
     exe = _chromium()
     if exe is None:
-        pytest.skip("no Chromium found (apt-get install chromium; .ci/run does it as root)")
+        skip_unless_required("no Chromium found (apt-get install chromium; .ci/run does it)")
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as pw:
