@@ -23,15 +23,12 @@ from tether.config import scenario_from_dict, sweep_spec
 from tether.runner import build_world, run
 from tether.sensing import sense
 
-EFFECT_MODULES = (
-    "test_parameter_effects",
-    "test_parameter_effects_silent",
-    "test_parameter_effects_exploration",
-    "test_parameter_effects_continuous",
-)
+#: every module of effect tests (a new ``test_parameter_effects_*.py`` is found by its name)
+EFFECT_MODULES = sorted(p.stem for p in Path(__file__).parent.glob("test_parameter_effects*.py"))
 
 
 def test_every_parameter_has_an_effect_test() -> None:
+    assert "test_parameter_effects_silent" in EFFECT_MODULES  # the glob found the modules
     for name in EFFECT_MODULES:
         importlib.import_module(name)
     keys = set(scenario_parameters())
