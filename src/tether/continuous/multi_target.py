@@ -186,7 +186,10 @@ class MultiTargetStrategy(ConnectivityStrategy):
         if self._fused is not None:
             return self._fused(q, v, cache)
         f_lambda = self.connectivity_force(cache)
-        total = f_lambda + self._external(q, v, f_lambda)
+        f_i = self._external(q, v, f_lambda)
+        if self.estimator is not None:  # a failed robot exerts no force, as in connectivity
+            f_i = f_i * self.estimator.comm.alive()[:, None]
+        total = f_lambda + f_i
         return total, f_lambda, displacement_step(v, total, self.integ.mass_kg,
                                                   self.integ.max_step_m)  # fmt: skip
 
