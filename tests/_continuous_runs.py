@@ -74,11 +74,17 @@ def pulled(strategy: str, **params: Any) -> dict[str, Any]:
     return scenario(strategy, **params)
 
 
-def reset(data: dict[str, Any]) -> Any:
-    """The strategy built from ``data`` and reset on its initial team (not stepped)."""
+def started(data: dict[str, Any]) -> tuple[Any, np.ndarray]:
+    """The strategy built from ``data``, reset on its initial team (not stepped), and the
+    team's positions."""
     b = built(data)
     b.strategy.reset(b.world, b.initial, b.rng)
-    return b.strategy
+    return b.strategy, b.initial.positions
+
+
+def reset(data: dict[str, Any]) -> Any:
+    """The strategy built from ``data`` and reset on its initial team (not stepped)."""
+    return started(data)[0]
 
 
 def run(data: dict[str, Any], steps: int | None = None) -> Ran:
