@@ -29,6 +29,7 @@ from tether.comm import CommParams, MessageLayer
 from tether.continuous.consensus import EfficiencyConsensus
 from tether.continuous.dynamics import displacement_step
 from tether.continuous.election import Election
+from tether.continuous.external import check_failures
 from tether.continuous.motion import anchor_targets, travel_args, travel_gains, traveling_forces
 from tether.continuous.multi_target_checks import check_planning_grid, target_book
 from tether.continuous.multi_target_params import MultiTargetParams
@@ -117,6 +118,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         rng: np.random.Generator,
     ) -> MultiTargetStrategy:
         cls.check_start(params, scenario, world, initial)
+        check_failures(params.estimator.failures, initial.n, scenario.source)
         check_planning_grid(params.r_grid_m, scenario, world)  # built at reset; validate sees it
         book = target_book(params.targets, scenario, world, initial.n, rng)
         return cls(params, book)
