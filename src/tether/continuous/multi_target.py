@@ -146,6 +146,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         )  # fmt: skip
         self.planner.start_up(state.positions)
         self.filter: ReferenceFilter | None = None  # made at the first step (it needs dt)
+        self._reference_m = state.positions.copy()  # the filter's start: the robots
         self._t_s = 0.0
         self._completion: float | None = 0.0 if self.planner.done() else None
         self._travelled = np.zeros(n)
@@ -394,9 +395,11 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     def robot_values(self) -> dict[str, np.ndarray]:
         out = {"role": _ROLE_ARRAY[self.planner.role]}
-        if self.filter is not None:  # the reference of eq. (16), from step 1 on
-            for d, axis in zip(range(self.filter.position.shape[1]), "xyz", strict=False):
-                out[f"{axis}_ref_m"] = self.filter.position[:, d].copy()
+        if self.params.reference_filter:  # the reference of eq. (16), from step 0 on (the
+            # recorder keeps the columns of the first record only)
+            ref = self.filter.position if self.filter is not None else self._reference_m
+            for d, axis in zip(range(ref.shape[1]), "xyz", strict=False):
+                out[f"{axis}_ref_m"] = ref[:, d].copy()
         return out
 
     def metrics(self) -> dict[str, Any]:
