@@ -183,6 +183,8 @@ def test_connectivity_s_external_force_is_refused_not_ignored(capsys):
 
 
 def test_a_failed_robot_must_be_in_the_team(capsys):
-    args = sets("strategy.params.eigensolver=estimator", "strategy.params.estimator.failures={9: 3}")
+    args = sets(
+        "strategy.params.eigensolver=estimator", "strategy.params.estimator.failures={9: 3}"
+    )
     code, _, err = tether(capsys, "validate", "multi_target_experiment", *args)
     one_line(code, err, "strategy.params.estimator.failures: 9 is not a robot index in 0..5")

@@ -1,7 +1,7 @@
 """Every scenario parameter changes a run the way its documentation says.
 
 The list of parameters is generated from the models (``_parameters.py``): a parameter
-without an effect test, a declared reason or a pending entry fails
+without an effect test or a declared reason fails
 :func:`test_every_parameter_has_an_effect_test`. This module holds the scenario's own
 blocks (top level, ``world``, ``team``, ``sensing``, ``sim``, ``output``, ``sweep``);
 the strategies' parameters are in ``test_parameter_effects_*.py``.
@@ -18,7 +18,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from _parameter_runs import SILENT, built, changed, ran
-from _parameters import EFFECTS, NO_EFFECT, effect, pending, scenario_parameters
+from _parameters import EFFECTS, NO_EFFECT, effect, scenario_parameters
 from tether.config import scenario_from_dict, sweep_spec
 from tether.runner import build_world, run
 from tether.sensing import sense
@@ -32,7 +32,7 @@ def test_every_parameter_has_an_effect_test() -> None:
     for name in EFFECT_MODULES:
         importlib.import_module(name)
     keys = set(scenario_parameters())
-    covered = set(EFFECTS) | set(NO_EFFECT) | set(pending())
+    covered = set(EFFECTS) | set(NO_EFFECT)
     assert not keys - covered, f"parameters without an effect test: {sorted(keys - covered)}"
     assert not set(EFFECTS) - keys, f"effect tests of no parameter: {set(EFFECTS) - keys}"
     assert not set(NO_EFFECT) & set(EFFECTS), "a parameter both with and without an effect"
