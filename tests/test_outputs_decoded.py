@@ -26,7 +26,7 @@ from _parameter_runs import SILENT, changed
 from tether.config import load_scenario, scenario_from_dict
 from tether.export.ros2 import export
 from tether.runner import build_world, run
-from tether.viz.replay import write_replay
+from tether.viewing.replay import write_replay
 
 
 @pytest.fixture(scope="module")
