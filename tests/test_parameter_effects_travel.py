@@ -19,6 +19,7 @@ import pytest
 from _continuous_runs import FAR_TARGET, columns, moved_m, pulled, run, scenario, started
 from _parameters import effect
 from tether.continuous.motion import traveling_forces
+from tether.continuous.roles import PRIME
 
 
 def two_travelers(**params: Any) -> dict[str, Any]:
@@ -113,6 +114,17 @@ def test_alpha_weighs_the_prime_s_velocity_error_against_its_position_error() ->
         first.append(float(eff[~np.isnan(eff)][0]))
     band = 0.5 + 0.5 * np.cos((1.5 - 0.3) / (1.8 - 0.3) * np.pi)
     assert first == pytest.approx([0.0, band, 1.0], abs=0.02)
+    # the other way round: 1 m off its path at the path's velocity, e = alpha 1 m
+    for alpha in (0.2, 0.5, 0.9):
+        s, q = started(scenario("multi_target", alpha_lambda=alpha))
+        s.planner.set_role(3, PRIME, 0.0)
+        off = q.copy()
+        off[3, 1] += 1.0
+        v = np.zeros_like(q)
+        v[3] = s.planner.path_set()[1].states(off[[3]], 3.0).velocity_mps[0]
+        s._communicate(off, v, 0.0, 0.1)
+        want = 1.0 if alpha <= 0.3 else 0.5 + 0.5 * np.cos((alpha - 0.3) / 1.5 * np.pi)
+        assert s._prime_eff == pytest.approx(want, abs=1e-9), alpha
 
 
 # -- eq. (3): the traveling force --------------------------------------------------------------
