@@ -2,12 +2,10 @@
 
 :func:`scenario_parameters` walks :class:`tether.config.Scenario` and the ``Params`` model
 of every built-in strategy. Each parameter must have an effect test (registered with
-:func:`effect` in a ``test_parameter_effects*.py`` module), a declared reason why setting
-it cannot change a run (:data:`NO_EFFECT`), or belong to one of :data:`PENDING_STRATEGIES`
-(listed by :func:`pending` until its test is written); ``test_parameter_effects.py``
-fails on a parameter that has none, so a new parameter needs its test. Keys: ``sim.dt_s``
-for the scenario, ``silent:trajectory.speed_mps`` for a strategy's parameters. The lead
-fills the pending ones: an :func:`effect` test for a parameter takes it off the list.
+:func:`effect` in a ``test_parameter_effects*.py`` module) or a declared reason why setting
+it cannot change a run (:data:`NO_EFFECT`); ``test_parameter_effects.py`` fails on a
+parameter that has neither, so a new parameter needs its test. Keys: ``sim.dt_s`` for the
+scenario, ``silent:trajectory.speed_mps`` for a strategy's parameters.
 """
 
 from __future__ import annotations
@@ -32,10 +30,6 @@ NO_EFFECT: dict[str, str] = {
     "strategy.params": "a mapping validated by the strategy's own Params model, whose "
     "fields are listed one by one (keys 'STRATEGY:field')",
 }
-
-#: strategies whose parameters are being redesigned: each of their parameters is listed
-#: here until its effect test is written (the ones with a test already are left out)
-PENDING_STRATEGIES = ("connectivity", "multi_target")
 
 
 def _models_in(annotation: Any) -> list[type[BaseModel]]:
@@ -71,16 +65,6 @@ def scenario_parameters() -> list[str]:
     for name in builtin_strategies():
         keys += [f"{name}:{k}" for k in model_fields(STRATEGIES.get(name).Params)]
     return sorted(dict.fromkeys(keys))
-
-
-def pending() -> dict[str, str]:
-    """Parameters of :data:`PENDING_STRATEGIES` still without an effect test."""
-    reason = "parameters being redesigned (a safeguard mode, robot-model bounds); tests follow"
-    return {
-        k: reason
-        for k in scenario_parameters()
-        if k.split(":")[0] in PENDING_STRATEGIES and k not in EFFECTS
-    }
 
 
 def effect(*keys: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:

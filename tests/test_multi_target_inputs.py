@@ -166,3 +166,25 @@ def test_a_planning_grid_beyond_max_cells_is_refused_within_the_allowance(capsys
     code, _, err = tether(capsys, "validate", "multi_target_office",
                           *sets("strategy.params.r_grid_m=0.02"))  # fmt: skip
     one_line(code, err, "strategy.params.r_grid_m", "more than the 50,000,000 a grid may have")
+
+
+# --------------------------------------------------------------------------- connectivity's keys
+
+
+def test_connectivity_s_external_force_is_refused_not_ignored(capsys):
+    """multi_target's ``f_i`` is Algorithm 2's traveling force: an ``external`` block
+    (the ``connectivity`` strategy's stand-in for it) would change nothing."""
+    code, _, err = tether(capsys, "validate", "multi_target_experiment",
+                          *sets("strategy.params.external.kind=random"))  # fmt: skip
+    one_line(code, err, "multi_target_experiment: strategy.params.external")
+    code, _, err = tether(capsys, "validate", "connectivity_town",
+                          *sets("strategy.params.external.kind=random"))  # fmt: skip
+    assert code == 0, err
+
+
+def test_a_failed_robot_must_be_in_the_team(capsys):
+    args = sets(
+        "strategy.params.eigensolver=estimator", "strategy.params.estimator.failures={9: 3}"
+    )
+    code, _, err = tether(capsys, "validate", "multi_target_experiment", *args)
+    one_line(code, err, "strategy.params.estimator.failures: 9 is not a robot index in 0..5")

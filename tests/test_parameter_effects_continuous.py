@@ -1,7 +1,6 @@
-"""Effects of ``connectivity`` and ``multi_target`` parameters with a test already.
-
-The other parameters of these two strategies are listed as pending in ``_parameters.py``
-(they are being redesigned); each test here takes its parameter off that list.
+"""Effects of ``connectivity`` and ``multi_target`` parameters: a failed robot, a stalled
+prime's replanning. The others are in ``test_parameter_effects_{table2, robot, estimator,
+external, travel, roles, help, targets}.py``.
 """
 
 from __future__ import annotations

@@ -4,7 +4,9 @@ The host of an election (robot 0 at start-up, then the prime traveler when it
 reaches its target) opens election ``e``; the candidates (secondary travelers;
 at start-up every robot with a target) flood ``(criterion, index)`` and every
 robot keeps the smallest pair it heard (ties to the lower index). After
-``2(N - 1)`` rounds the host decides: the best candidate it heard wins, and the
+``2(N - 1)`` rounds (``2(N - 1)(1 + d)`` when messages arrive ``d`` rounds late: the
+round trip to a candidate ``N - 1`` hops away) the host decides: the best candidate it
+heard wins, and the
 result is flooded until it reaches the winner, who becomes the prime traveler.
 Every message goes through :class:`tether.comm.MessageLayer`, so loss, delay and
 failures reach the election too: a lost reply can only make a worse candidate
@@ -62,7 +64,8 @@ class Election:
     Parameters
     ----------
     n
-        Team size (known to every robot: it sets the ``2(N - 1)`` rounds).
+        Team size (known to every robot: it sets the ``2(N - 1)`` rounds, times
+        ``1 + delay_rounds`` of the layer).
     layer
         The message layer the election talks through.
     host
@@ -72,7 +75,9 @@ class Election:
     def __init__(self, n: int, layer: MessageLayer, host: int = 0) -> None:
         self.n = n
         self.layer = layer
-        self.wait_rounds = 2 * max(n - 1, 1)
+        # a hop takes 1 + delay_rounds rounds: the open election must reach a candidate
+        # N - 1 hops away and its reply come back before the host decides
+        self.wait_rounds = 2 * max(n - 1, 1) * (1 + layer.params.delay_rounds)
         self.msg = np.zeros((n, 8))
         self.msg[:, BEST] = np.inf
         self.msg[:, BEST_IDX] = n  # "nobody"
@@ -172,7 +177,7 @@ class Election:
     def _decide(self, secondary: np.ndarray, out: Outcome) -> None:
         """After the exchange: hosts decide, winners take or decline, tokens in transit land."""
         m = self.msg
-        # hosts decide after 2(N - 1) rounds
+        # hosts decide after 2(N - 1) rounds (times 1 + the layer's delay)
         for h in np.flatnonzero((self.token == HOSTING) | (self.token == ACTIVE)):
             if self.opened_round[h] < 0 or self.rounds - self.opened_round[h] < self.wait_rounds:
                 continue

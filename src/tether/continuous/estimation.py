@@ -40,7 +40,12 @@ each neighbour (and drops the neighbour's term if it never got one).
 
 The Euler step is ``step_scale / (k1 + k3 + gamma + 2 k2 dW + 2 (kP + kI) d)``
 with ``dW``/``d`` the largest weighted/unweighted degree, a bound that a
-max-consensus provides in a deployment (we read it from the graph).
+max-consensus provides in a deployment (we read it from the graph), or
+``1.1 (2 kI d)^2 / (gamma + 2 kP d)`` if that is larger (never with the default
+gains): the PI consensus has oscillating modes, of modulus ``kI mu`` for a Laplacian
+eigenvalue ``mu <= 2 d``, which the Euler step keeps decaying only below
+``(gamma + kP mu) / (kI mu)^2`` (with ``kI = 12`` and the sum alone the estimates
+overflowed within a few hundred rounds).
 """
 
 from __future__ import annotations
@@ -138,8 +143,10 @@ class FiedlerEstimator:
         n = self.n
         deg_w = np.bincount(pairs[:, 0], w, n) + np.bincount(pairs[:, 1], w, n)
         deg = np.bincount(pairs.ravel(), minlength=n)
-        bound = p.k1 + p.k3 + p.gamma + 2 * p.k2 * deg_w.max(initial=0.0)
-        bound += 2 * (p.kp + p.ki) * deg.max(initial=0)
+        d = deg.max(initial=0)
+        bound = p.k1 + p.k3 + p.gamma + 2 * p.k2 * deg_w.max(initial=0.0) + 2 * (p.kp + p.ki) * d
+        # the PI consensus's oscillating modes (module docstring): never with the defaults
+        bound = max(bound, 1.1 * (2 * p.ki * d) ** 2 / (p.gamma + 2 * p.kp * d))
         eps = p.step_scale / bound
         gains = np.array(
             [[-p.k2, 0, 0, 0, 0],  # x: weighted Laplacian

@@ -91,6 +91,11 @@ def check_external(
         raise ScenarioError(
             f"{field}.forces: give one force of {dim} numbers for all robots or one per robot ({n})"
         )
+    check_failures(failures, n, src)
+
+
+def check_failures(failures: dict[int, int], n: int, src: str) -> None:
+    """The robots of ``estimator.failures`` are robots of the team of ``n``."""
     bad = [r for r in failures if not 0 <= r < n]
     if bad:
         raise ScenarioError(

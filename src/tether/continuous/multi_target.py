@@ -29,6 +29,7 @@ from tether.comm import CommParams, MessageLayer
 from tether.continuous.consensus import EfficiencyConsensus
 from tether.continuous.dynamics import displacement_step
 from tether.continuous.election import Election
+from tether.continuous.external import check_failures
 from tether.continuous.motion import anchor_targets, travel_args, travel_gains, traveling_forces
 from tether.continuous.multi_target_checks import check_planning_grid, target_book
 from tether.continuous.multi_target_params import MultiTargetParams
@@ -117,6 +118,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         rng: np.random.Generator,
     ) -> MultiTargetStrategy:
         cls.check_start(params, scenario, world, initial)
+        check_failures(params.estimator.failures, initial.n, scenario.source)
         check_planning_grid(params.r_grid_m, scenario, world)  # built at reset; validate sees it
         book = target_book(params.targets, scenario, world, initial.n, rng)
         return cls(params, book)
@@ -144,6 +146,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         )  # fmt: skip
         self.planner.start_up(state.positions)
         self.filter: ReferenceFilter | None = None  # made at the first step (it needs dt)
+        self._reference_m = state.positions.copy()  # the filter's start: the robots
         self._t_s = 0.0
         self._completion: float | None = 0.0 if self.planner.done() else None
         self._travelled = np.zeros(n)
@@ -186,7 +189,10 @@ class MultiTargetStrategy(ConnectivityStrategy):
         if self._fused is not None:
             return self._fused(q, v, cache)
         f_lambda = self.connectivity_force(cache)
-        total = f_lambda + self._external(q, v, f_lambda)
+        f_i = self._external(q, v, f_lambda)
+        if self.estimator is not None:  # a failed robot exerts no force, as in connectivity
+            f_i = f_i * self.estimator.comm.alive()[:, None]
+        total = f_lambda + f_i
         return total, f_lambda, displacement_step(v, total, self.integ.mass_kg,
                                                   self.integ.max_step_m)  # fmt: skip
 
@@ -389,9 +395,11 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     def robot_values(self) -> dict[str, np.ndarray]:
         out = {"role": _ROLE_ARRAY[self.planner.role]}
-        if self.filter is not None:  # the reference of eq. (16), from step 1 on
-            for d, axis in zip(range(self.filter.position.shape[1]), "xyz", strict=False):
-                out[f"{axis}_ref_m"] = self.filter.position[:, d].copy()
+        if self.params.reference_filter:  # the reference of eq. (16), from step 0 on (the
+            # recorder keeps the columns of the first record only)
+            ref = self.filter.position if self.filter is not None else self._reference_m
+            for d, axis in zip(range(ref.shape[1]), "xyz", strict=False):
+                out[f"{axis}_ref_m"] = ref[:, d].copy()
         return out
 
     def metrics(self) -> dict[str, Any]:

@@ -10,11 +10,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from tether.continuous.params import TRAVEL_TABLE2
-from tether.continuous.strategy_params import (
-    MAX_DELAY_ROUNDS,
-    MAX_ROUNDS,
-    ConnectivityStrategyParams,
-)
+from tether.continuous.strategy_params import MAX_DELAY_ROUNDS, MAX_ROUNDS, ContinuousParams
 from tether.continuous.targets import height_range
 
 
@@ -59,7 +55,7 @@ PRESET_DEFAULTS: dict[str, dict[str, Any]] = {
 }
 
 
-class MultiTargetParams(ConnectivityStrategyParams):
+class MultiTargetParams(ContinuousParams):
     """Parameters of ``multi_target``: Table 2 (``preset``) plus the open choices."""
 
     targets: TargetsConfig = Field(default_factory=TargetsConfig)

@@ -37,7 +37,7 @@ from tether.continuous.external import check_external, external_force
 from tether.continuous.gradient import connectivity_force, exact_force, messages
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.potential import potential
-from tether.continuous.strategy_params import ConnectivityStrategyParams
+from tether.continuous.strategy_params import ConnectivityStrategyParams, ContinuousParams
 from tether.continuous.weights import compute_weights
 from tether.errors import ScenarioError
 from tether.graph.warm import WarmState
@@ -66,7 +66,7 @@ class ConnectivityStrategy(Strategy):
     #: force otherwise, multi_target's fused sub-step, turns it off)
     force_with_weights = True
 
-    def __init__(self, params: ConnectivityStrategyParams | None = None) -> None:
+    def __init__(self, params: ContinuousParams | None = None) -> None:
         super().__init__()
         self.params = params or ConnectivityStrategyParams()
         self.conn = self.params.connectivity()
@@ -87,7 +87,7 @@ class ConnectivityStrategy(Strategy):
 
     @staticmethod
     def check_start(
-        params: ConnectivityStrategyParams, scenario: Any, world: World, initial: TeamState
+        params: ContinuousParams, scenario: Any, world: World, initial: TeamState
     ) -> None:
         """One-line ``ScenarioError`` unless the initial weighted graph is in the safe set."""
         conn = params.connectivity()

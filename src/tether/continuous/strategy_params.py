@@ -48,8 +48,9 @@ class EstimatorConfig(EstimatorParams):
     failures: dict[int, int] = Field(default_factory=dict)
 
 
-class ConnectivityStrategyParams(_Strict):
-    """Parameters of strategy ``connectivity``.
+class ContinuousParams(_Strict):
+    """Parameters of the connectivity force, the robot and the integrator, shared by
+    ``connectivity`` and ``multi_target``.
 
     ``preset`` picks a column of Table 2 (``outdoor`` = empty space and town,
     ``office``, ``experiment`` = Sec. 4.2); any parameter given explicitly
@@ -84,7 +85,6 @@ class ConnectivityStrategyParams(_Strict):
     #: every sub-step (the same eigenpair)
     fiedler_method: Literal["auto", "lapack"] = "auto"
     estimator: EstimatorConfig = Field(default_factory=EstimatorConfig)
-    external: ExternalForce = Field(default_factory=ExternalForce)
 
     @model_validator(mode="before")
     @classmethod
@@ -101,7 +101,7 @@ class ConnectivityStrategyParams(_Strict):
         return data
 
     @model_validator(mode="after")
-    def _consistent(self) -> ConnectivityStrategyParams:
+    def _consistent(self) -> ContinuousParams:
         try:  # ValueError such as "need 0 < R's < Rs" for radii out of order
             self.connectivity()
         except ValueError as exc:
@@ -156,3 +156,10 @@ class ConnectivityStrategyParams(_Strict):
 
     def estimator_params(self) -> EstimatorParams:
         return self.estimator.gains()
+
+
+class ConnectivityStrategyParams(ContinuousParams):
+    """Parameters of strategy ``connectivity``: :class:`ContinuousParams` and the external
+    force ``f_i`` of eq. (1) (``multi_target``'s is Algorithm 2's traveling force)."""
+
+    external: ExternalForce = Field(default_factory=ExternalForce)
