@@ -26,7 +26,7 @@ import yaml
 from tether import __version__
 from tether.config import Scenario
 from tether.errors import OutputError
-from tether.runfolder import is_run_folder, write_json, write_yaml
+from tether.runfolder import write_json, write_yaml
 
 __all__ = [
     "STORE_FILE",
@@ -100,13 +100,24 @@ def _recorded(out: Path) -> tuple[str | None, dict[str, Any] | None]:
 
 
 def is_sweep_folder(out: Path) -> bool:
-    """A folder a sweep wrote (its scenario, table, store file or a trial's run folder)."""
-    if any((out / name).is_file() for name in (SWEEP_SCENARIO, SWEEP_TABLE, STORE_FILE)):
-        return True
-    return any(
-        is_run_folder(run) for combo in out.iterdir() if combo.is_dir()
-        for run in combo.glob("seed-*")
-    )  # fmt: skip
+    """A folder a sweep wrote: it holds tether's ``store.json`` (never judged by common names).
+
+    Only a regular file that is a JSON object of a store format this version reads, with
+    the scenario hash and the tether version, counts.
+    """
+    file = out / STORE_FILE
+    try:
+        if file.is_symlink() or not file.is_file() or file.stat().st_size > 1 << 20:
+            return False
+        data = json.loads(file.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return (
+        isinstance(data, dict)
+        and data.get("format") == STORE_FORMAT
+        and isinstance(data.get("scenario_hash"), str)
+        and isinstance(data.get("tether_version"), str)
+    )
 
 
 def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
@@ -129,8 +140,9 @@ def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
         if out.is_dir() and any(out.iterdir()):
             if not is_sweep_folder(out):
                 raise OutputError(
-                    f"{out}: folder is not empty and not a tether sweep folder; choose a new or "
-                    "empty folder for --out (a sweep resumes only in its own folder)"
+                    f"{out}: folder is not empty and not a tether sweep folder (it has no "
+                    f"tether {STORE_FILE}); choose a new or empty folder for --out (a sweep "
+                    "resumes only in its own folder)"
                 )
             old_hash, old = _recorded(out)
             if old_hash is not None and old_hash != new_hash:
@@ -141,7 +153,6 @@ def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
                     "new --out, or undo the change to resume"
                 )
         out.mkdir(parents=True, exist_ok=True)
-        write_yaml(out / SWEEP_SCENARIO, data)
         write_json(
             out / STORE_FILE,
             {
@@ -151,6 +162,7 @@ def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
                 "tether_version": __version__,
             },
         )
+        write_yaml(out / SWEEP_SCENARIO, data)
     except OSError as exc:
         raise OutputError(
             f"{out}: cannot write the sweep folder ({exc.strerror or exc}); choose a writable --out"
