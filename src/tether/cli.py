@@ -194,10 +194,12 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
     """
     from tether.experiments.plan import check_combinations
     from tether.runfolder import check_writable
-    from tether.runner import build, check_sweep, strategy_class
+    from tether.runner import build, check_sweep, strategy_class, strategy_params
+    from tether.usercode import code_references
 
     sc = _load(scenario, set_, quick)
     build(sc)
+    calls = code_references(strategy_params(sc, strategy_class(sc)), "strategy.params.")
     n_combos = check_combinations(sc)  # every combination of the sweep block builds
     if not quick and "quick" in sc.sweep:  # the quick size's keys and axis values
         small = _load(scenario, set_, quick=True)
@@ -210,6 +212,8 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
         markup=False,
         highlight=False,
     )
+    for field, spec in calls:  # code the scenario names (only ever from loaded modules)
+        out.print(f"  calls {spec} ({field})", markup=False, highlight=False)
 
 
 @app.command("list")
