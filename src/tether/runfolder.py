@@ -18,7 +18,6 @@ import platform
 import shutil
 import subprocess
 import tempfile
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -29,10 +28,10 @@ import scipy
 import yaml
 
 from tether import __version__
+from tether.atomic import UMASK
+from tether.atomic import atomic_write as atomic_write  # re-exported
+from tether.atomic import check_output_path as check_output_path  # re-exported
 from tether.errors import OutputError
-
-_UMASK = os.umask(0)
-os.umask(_UMASK)
 
 SUMMARY = "summary.json"
 SCENARIO = "scenario.yaml"
@@ -42,25 +41,6 @@ MARKER = ".tether-run.json"
 MARKER_FORMAT = 1
 _MARKER_KIND = "tether run folder"
 _MARKER_MAX_BYTES = 1 << 20
-
-
-def atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it onto ``path``.
-
-    A symbolic link or a folder at ``path`` is refused (:class:`OutputError`): tether never
-    writes through a link to a file elsewhere, nor replaces a link the user made.
-    """
-    check_output_path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are ordinary files
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def jsonable(value: Any) -> Any:
@@ -133,17 +113,6 @@ def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
 
         plt.close(fig)  # long sweeps would otherwise keep every figure alive
     return path
-
-
-def check_output_path(path: Path) -> None:
-    """Refuse (:class:`OutputError`) an output file path that is a link or a folder."""
-    if path.is_symlink():
-        raise OutputError(
-            f"{path}: is a symbolic link; tether does not write through links (remove the "
-            "link or choose another output path)"
-        )
-    if path.is_dir():
-        raise OutputError(f"{path}: is a folder; give a file path or another --out")
 
 
 def read_marker(path: Path) -> dict[str, Any] | None:
@@ -299,7 +268,7 @@ class RunFolder:
                 f"{self.path}: cannot create the run folder ({exc.strerror or exc}); "
                 "choose a writable --out"
             ) from None
-        os.chmod(self.staging, 0o777 & ~_UMASK)
+        os.chmod(self.staging, 0o777 & ~UMASK)
         self.written: list[str] = []
 
     def _make_staging(self, tries: int = 5) -> Path:

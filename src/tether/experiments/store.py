@@ -21,12 +21,11 @@ import json
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from tether import __version__
 from tether.config import Scenario
-from tether.errors import OutputError
+from tether.errors import OutputError, TetherError
 from tether.runfolder import write_json, write_yaml
+from tether.yamlfile import read_yaml
 
 __all__ = [
     "STORE_FILE",
@@ -86,9 +85,9 @@ def _recorded(out: Path) -> tuple[str | None, dict[str, Any] | None]:
     """The hash and scenario a sweep folder records (None when it records none)."""
     old: dict[str, Any] | None = None
     try:
-        loaded = yaml.safe_load((out / SWEEP_SCENARIO).read_text())
+        loaded = read_yaml(out / SWEEP_SCENARIO, str(out / SWEEP_SCENARIO))
         old = loaded if isinstance(loaded, dict) else None
-    except (OSError, yaml.YAMLError):
+    except (OSError, TetherError):
         pass
     try:
         recorded = json.loads((out / STORE_FILE).read_text()).get("scenario_hash")
