@@ -193,12 +193,13 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
     too (its keys and values); --quick checks the quick size as fully as the full one.
     """
     from tether.experiments.plan import check_combinations
+    from tether.limits import format_bytes
     from tether.runfolder import check_writable
     from tether.runner import build, check_sweep, strategy_class, strategy_params
     from tether.usercode import code_references
 
     sc = _load(scenario, set_, quick)
-    build(sc)
+    need = build(sc).memory_bytes
     calls = code_references(strategy_params(sc, strategy_class(sc)), "strategy.params.")
     n_combos = check_combinations(sc)  # every combination of the sweep block builds
     if not quick and "quick" in sc.sweep:  # the quick size's keys and axis values
@@ -208,7 +209,8 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
     size = ", quick size" if quick else ""
     swept = f", sweep of {n_combos} combinations{size}" if n_combos else size
     out.print(
-        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept})",
+        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept}; memory about "
+        f"{format_bytes(need)})",
         markup=False,
         highlight=False,
     )

@@ -32,9 +32,13 @@ from tether.config import (
 )
 from tether.errors import MapError, OutputError, ScenarioError, TetherError
 from tether.graph import is_connected
-from tether.limits import format_bytes, memory_budget_bytes
 from tether.plugins import load_builtins
-from tether.record import TrajectoryRecorder, summarize
+from tether.record import (
+    TrajectoryRecorder,
+    check_run_size,
+    check_size_before_work,
+    summarize,
+)
 from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
 from tether.sensing import SensorModel, sensed_pairs
@@ -58,6 +62,8 @@ class Built:
     initial: TeamState
     strategy: Strategy
     rng: np.random.Generator
+    #: the memory the run needs, estimated before it starts (bytes)
+    memory_bytes: float = 0.0
 
 
 @dataclass
@@ -289,6 +295,7 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
     cls = strategy_class(scenario)
     params = strategy_params(scenario, cls)
     check_sweep(scenario, cls)
+    check_size_before_work(scenario)
     world = build_world(scenario, rng)
     sensor = make_sensor(scenario)
     initial = cls.initial_state(params, scenario, world, rng)
@@ -297,52 +304,8 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
         positions, pairs = _place_team(scenario, world, sensor, rng)
         initial = TeamState.at_rest(positions)
     strategy = cls.from_scenario(params, scenario, world, initial, rng)
-    check_run_size(scenario, initial, strategy, sensor, pairs)
-    return Built(scenario, world, sensor, initial, strategy, rng)
-
-
-def check_run_size(
-    scenario: Scenario,
-    initial: TeamState,
-    strategy: Strategy,
-    sensor: SensorModel,
-    pairs: np.ndarray | None,
-) -> None:
-    """Refuse a run whose records or per-step sensing would not fit in memory.
-
-    The estimate counts what the recorder keeps (per-step records; positions
-    and links of every recorded step, links counted as in the initial team)
-    and, for strategies on the core sensing model with occlusion, the
-    per-step occlusion test (``sum of degree^2`` candidate triples).
-    """
-    n = initial.n + (0 if initial.fixed is None else len(initial.fixed))
-    steps = scenario.sim.max_steps + 1
-    recorded = scenario.sim.max_steps // scenario.output.record_every + 1
-    links = 0 if pairs is None else len(pairs)
-    records = steps * 400  # a StepRecord and its values per step
-    records += recorded * n * (initial.dim + 2) * 8 * 2  # positions, then their table columns
-    records += recorded * links * 2 * 8 * 2  # link pairs, then their table columns
-    occlusion = 0.0
-    core_sensing = type(strategy).sense is Strategy.sense
-    if core_sensing and links and sensor.occlusion and sensor.body_radius_m > 0:
-        degree = np.bincount(pairs.ravel(), minlength=initial.n).astype(float)
-        occlusion = float(degree @ degree) * 150  # the arrays of one step's occlusion test
-    need, budget = records + occlusion, memory_budget_bytes()
-    if need <= budget:
-        return
-    what = f"{initial.n:,} robots with {links:,} links at the start"
-    if occlusion > records:
-        raise ScenarioError(
-            f"{scenario.source}: team.n_robots: {what}: testing which robot bodies hide which "
-            f"links needs about {format_bytes(occlusion)} at every step, more than the "
-            f"{format_bytes(budget)} allowed here; use fewer robots, a shorter sensing.range_m, "
-            "or sensing.occlusion: false"
-        )
-    raise ScenarioError(
-        f"{scenario.source}: team.n_robots: {what}: recording {scenario.sim.max_steps:,} steps "
-        f"needs about {format_bytes(need)}, more than the {format_bytes(budget)} allowed here; "
-        "use fewer robots or steps, or raise output.record_every"
-    )
+    need = check_run_size(scenario, initial, strategy, sensor, pairs)
+    return Built(scenario, world, sensor, initial, strategy, rng, need)
 
 
 def place_team(
