@@ -51,7 +51,7 @@ from tether.recurrent.report_settings import (
     settings_table,
 )
 from tether.recurrent.report_tables import run_statistics
-from tether.runfolder import machine
+from tether.runfolder import machine, save_figure, write_json
 from tether.viz.plots import pyplot
 
 __all__ = ["combination", "make_report", "paper_scenario", "trial_scenario"]
@@ -222,7 +222,7 @@ def make_report(
         report["maps"][m] = {**old.get("maps", {}).get(m, {}), **entry}
     for m, entry in old.get("maps", {}).items():
         report["maps"].setdefault(m, entry)
-    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    write_json(out / "report.json", report)
     _figures(out, maps, chosen, runs, thetas)
     return report
 
@@ -263,7 +263,7 @@ def _figures(
                 ax.legend()
         axes[0].set_ylabel("explored area [%]")
         fig.tight_layout()
-        fig.savefig(out / f"fig4_{m}.png", dpi=120)
+        save_figure(fig, out / f"fig4_{m}.png")
         plt.close(fig)
 
     curves = [f"theta{th}" for th in thetas if f"theta{th}" in chosen]
@@ -280,7 +280,7 @@ def _figures(
             ax.grid(alpha=0.3)
             ax.legend(fontsize=8)
         fig.tight_layout()
-        fig.savefig(out / "fig5.png", dpi=120)
+        save_figure(fig, out / "fig5.png")
         plt.close(fig)
 
         rep = json.loads((out / "report.json").read_text())
@@ -295,7 +295,7 @@ def _figures(
             ax.set_ylabel("steps out of communication (mean per robot)")
             ax.grid(axis="y", alpha=0.3)
         fig.tight_layout()
-        fig.savefig(out / "fig6.png", dpi=120)
+        save_figure(fig, out / "fig6.png")
         plt.close(fig)
         _time_shares_figure(out, maps, curves, rep, plt)
 
@@ -319,7 +319,7 @@ def _time_shares_figure(out: Path, maps: tuple[str, ...], curves: list[str], rep
         ax.set_ylim(0, 100)
     axes[0][0].legend(fontsize=8, loc="lower left")
     fig.tight_layout()
-    fig.savefig(out / "fig_time.png", dpi=120)
+    save_figure(fig, out / "fig_time.png")
     plt.close(fig)
 
 

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from tether.errors import TetherError
+from tether.viz.output import check_target, write_output
 from tether.viz.payload import build_payload
 from tether.viz.runfolder import RunData, load_run
 
@@ -102,8 +103,12 @@ def write_replay(
     file within ``budget_bytes``.
     """
     start = time.perf_counter()
+    if out is not None:
+        check_target(Path(out))  # before any work
     if not isinstance(run, RunData):
         run = load_run(run)
+    if out is None:
+        check_target(run.path / "replay.html")
     if run.n_frames == 0:
         raise TetherError(f"{run.path}: nothing to replay (robots.parquet has no rows)")
     fixed = _fixed_bytes()
@@ -112,9 +117,9 @@ def write_replay(
     payload = build_payload(run, budget_bytes=budget_bytes, fixed_bytes=fixed)
     text = render_html(payload.meta, payload.blob_b64)
     out_path = Path(out) if out is not None else run.path / "replay.html"
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    out_path.write_text(text, encoding="utf-8")
-    size = out_path.stat().st_size
+    data = text.encode("utf-8")
+    size = write_output(out_path, lambda tmp: Path(tmp).write_bytes(data), what="replay",
+                        run_dir=run.path)  # fmt: skip
     return Replay(
         out_path, size, payload.n_frames_shown, payload.stride, time.perf_counter() - start
     )
