@@ -66,21 +66,40 @@ def three_script() -> str:
     )
 
 
-def _script_safe(text: str) -> str:
-    """Text that cannot close the ``<script>`` element it is placed in."""
+def _script_safe(text: str, name: str) -> str:
+    """Code that cannot leave the ``<script>`` element it is placed in.
+
+    ``</`` becomes ``<\\/`` (the same in JavaScript); code holding ``<!--`` or ``<script``,
+    which switch the HTML parser's script states, is refused (tether's own scripts never do).
+    """
+    if re.search(r"<!--|<script", text, re.IGNORECASE):
+        raise TetherError(f"{name}: holds '<!--' or '<script', which would break the page")
     return text.replace("</", "<\\/")
+
+
+def script_json(value: Any) -> str:
+    """JSON for a ``<script type="application/json">`` element: no ``<``, ``>`` or ``&``.
+
+    Data (a scenario's name, its notes) may hold ``</script>``, ``<!--`` or ``<script``;
+    written as ``\\u003c`` and so on, they are the same JSON and cannot end the element or
+    switch the HTML parser into a state that swallows the rest of the page.
+    """
+    text = json.dumps(value, separators=(",", ":"))  # ASCII: U+2028 and U+2029 escaped too
+    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
 
 
 def render_html(meta: dict[str, Any], blob_b64: str) -> str:
     """The page: template + renderer + replay scripts + data."""
     page = _resource("web", "replay.html")
+    if not re.fullmatch(r"[A-Za-z0-9+/=\s]*", blob_b64):
+        raise TetherError("replay data: not base64")
     parts = {
         "__TITLE__": html.escape(str(meta.get("name", "run"))),
-        "__META__": _script_safe(json.dumps(meta, separators=(",", ":"))),
+        "__META__": script_json(meta),
         "__DATA__": blob_b64,
-        "__THREE__": _script_safe(three_script()),
-        "__SCENE__": _script_safe(_resource("web", "replay_scene.js")),
-        "__APP__": _script_safe(_resource("web", "replay_app.js")),
+        "__THREE__": _script_safe(three_script(), "three.module.min.js"),
+        "__SCENE__": _script_safe(_resource("web", "replay_scene.js"), "replay_scene.js"),
+        "__APP__": _script_safe(_resource("web", "replay_app.js"), "replay_app.js"),
     }
     pattern = re.compile("|".join(re.escape(k) for k in parts))
     return pattern.sub(lambda m: parts[m.group(0)], page)
