@@ -209,10 +209,11 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
     size = ", quick size" if quick else ""
     swept = f", sweep of {n_combos} combinations{size}" if n_combos else size
     out.print(
-        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept}; memory about "
-        f"{format_bytes(need)})",
+        f"{scenario}: ok ({sc.strategy.name}, {sc.team.n_robots} robots{swept}); memory about "
+        f"{format_bytes(need)}",
         markup=False,
         highlight=False,
+        soft_wrap=True,
     )
     for field, spec in calls:  # code the scenario names (only ever from loaded modules)
         out.print(f"  calls {spec} ({field})", markup=False, highlight=False)

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from tether.errors import TetherError
+from tether.lifetime import die_with_parent
 from tether.registry import Registry
 
 __all__ = ["EXECUTORS", "Trial", "TrialOutcome", "check_executor", "execute", "run_trial"]
@@ -98,7 +99,10 @@ def _serial(trials: list[Trial], workers: int, address: str | None) -> Iterator[
 
 @EXECUTORS.register("processes")
 def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
-    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
+    # the workers die with this process, however it dies (kill -9 included): no trial
+    # keeps running, and no worker waits forever, behind a sweep that is gone
+    pool_args = {"initializer": die_with_parent, "initargs": (os.getpid(),)}
+    with ProcessPoolExecutor(max_workers=max(1, workers), **pool_args) as pool:
         submitted = {pool.submit(run_trial, t): t for t in trials}
         pending = set(submitted)
         while pending:

@@ -18,12 +18,15 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
 from tether import __version__
 from tether.config import Scenario
 from tether.errors import OutputError, TetherError
+from tether.experiments.lock import LOCK_FILE, clean_leftovers, sweep_lock
 from tether.runfolder import write_json, write_yaml
 from tether.yamlfile import read_yaml
 
@@ -31,6 +34,7 @@ __all__ = [
     "STORE_FILE",
     "SWEEP_SCENARIO",
     "SWEEP_TABLE",
+    "locked_store",
     "open_store",
     "scenario_hash",
 ]
@@ -119,6 +123,46 @@ def is_sweep_folder(out: Path) -> bool:
     )
 
 
+def _check_folder(out: Path) -> bool:
+    """Refuse a file or a foreign non-empty folder at ``out``; True if it is a sweep folder.
+
+    A folder holding nothing but the sweep lock file counts as empty.
+    """
+    if out.is_symlink() or (out.exists() and not out.is_dir()):
+        raise OutputError(f"{out}: exists and is not a folder; choose another --out")
+    if not out.is_dir() or not any(p.name != LOCK_FILE for p in out.iterdir()):
+        return False
+    if not is_sweep_folder(out):
+        raise OutputError(
+            f"{out}: folder is not empty and not a tether sweep folder (it has no tether "
+            f"{STORE_FILE}); choose a new or empty folder for --out (a sweep resumes only in "
+            "its own folder)"
+        )
+    return True
+
+
+@contextmanager
+def locked_store(scenario: Scenario, out_dir: str | Path) -> Iterator[Path]:
+    """:func:`open_store` under the folder's sweep lock, held for the ``with`` block.
+
+    The folder is checked before anything is created in it; under the lock, what killed
+    sweeps left (staging folders, temporary files) is removed first
+    (:mod:`tether.experiments.lock`). A second sweep into the folder is refused in one line.
+    """
+    out = Path(out_dir)
+    try:
+        _check_folder(out)
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(
+            f"{out}: cannot write the sweep folder ({exc.strerror or exc}); choose a writable --out"
+        ) from None
+    with sweep_lock(out):
+        with suppress(OSError):  # what cannot be removed stays: it is hidden and never read
+            clean_leftovers(out)
+        yield open_store(scenario, out)
+
+
 def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
     """Create ``out_dir`` for a sweep of ``scenario``, or reopen the same scenario's sweep.
 
@@ -134,15 +178,7 @@ def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
     data = scenario.model_dump(mode="json")
     new_hash = scenario_hash(data)
     try:
-        if out.exists() and not out.is_dir():
-            raise OutputError(f"{out}: exists and is not a folder; choose another --out")
-        if out.is_dir() and any(out.iterdir()):
-            if not is_sweep_folder(out):
-                raise OutputError(
-                    f"{out}: folder is not empty and not a tether sweep folder (it has no "
-                    f"tether {STORE_FILE}); choose a new or empty folder for --out (a sweep "
-                    "resumes only in its own folder)"
-                )
+        if _check_folder(out):
             old_hash, old = _recorded(out)
             if old_hash is not None and old_hash != new_hash:
                 change = first_difference(old, data) if old is not None else "a change"
