@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -52,6 +53,19 @@ def _load(scenario: str, overrides: list[str] | None, quick: bool = False):
     return load_scenario_at(scenario, quick=quick, overrides=overrides)
 
 
+def _check_sweep_block(scenario: str, overrides: list[str] | None, sc, quick: bool = False) -> int:
+    """Every combination of the sweep block builds, and the quick size's keys and values
+    are valid (what ``validate`` checks beyond ``build``); the number of combinations."""
+    from tether.experiments.plan import check_combinations
+    from tether.runner import check_sweep, strategy_class
+
+    n_combos = check_combinations(sc)
+    if not quick and "quick" in sc.sweep:
+        small = _load(scenario, overrides, quick=True)
+        check_sweep(small, strategy_class(small))
+    return n_combos
+
+
 @app.command()
 def run(
     scenario: ScenarioArg = DEFAULT_SCENARIO,
@@ -73,6 +87,7 @@ def run(
     from tether.runner import run as run_scenario
 
     sc = _load(scenario, set_)
+    _check_sweep_block(scenario, set_, sc)  # what `validate` refuses, `run` refuses
     out.print(
         f"running {sc.name} ({sc.strategy.name}, {sc.team.n_robots} robots) ...",
         markup=False,
@@ -192,19 +207,15 @@ def validate(scenario: ScenarioArg, set_: SetOpt = None, quick: QuickOpt = False
     scenario that validates is one that runs. The sweep's quick size, if any, is checked
     too (its keys and values); --quick checks the quick size as fully as the full one.
     """
-    from tether.experiments.plan import check_combinations
     from tether.limits import format_bytes
     from tether.runfolder import check_writable
-    from tether.runner import build, check_sweep, strategy_class, strategy_params
+    from tether.runner import build, strategy_class, strategy_params
     from tether.usercode import code_references
 
     sc = _load(scenario, set_, quick)
     need = build(sc).memory_bytes
     calls = code_references(strategy_params(sc, strategy_class(sc)), "strategy.params.")
-    n_combos = check_combinations(sc)  # every combination of the sweep block builds
-    if not quick and "quick" in sc.sweep:  # the quick size's keys and axis values
-        small = _load(scenario, set_, quick=True)
-        check_sweep(small, strategy_class(small))
+    n_combos = _check_sweep_block(scenario, set_, sc, quick)
     check_writable(sc.output.dir)  # where `tether run` would write (without --out)
     size = ", quick size" if quick else ""
     swept = f", sweep of {n_combos} combinations{size}" if n_combos else size
@@ -321,7 +332,10 @@ def main(argv: list[str] | None = None) -> None:
     line with a hint; ``TETHER_DEBUG=1`` shows the traceback), 130 interrupted.
     """
     try:
-        app(args=argv, prog_name="tether", standalone_mode=False)
+        with warnings.catch_warnings():
+            if not os.environ.get("TETHER_DEBUG"):  # one line on stderr: no numpy warning
+                warnings.simplefilter("ignore", RuntimeWarning)
+            app(args=argv, prog_name="tether", standalone_mode=False)
     except TetherError as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)

@@ -44,6 +44,8 @@ MAX_DT_S = 86_400.0
 MAX_ROBOTS = 1_000_000
 MAX_STEPS = 100_000_000
 MAX_SEED = 2**63 - 1
+#: the longest scenario name, in bytes of UTF-8 (run folder names must stay under 255 bytes)
+MAX_NAME_BYTES = 100
 #: a run folder name part longer than this (bytes) is shortened and given a hash
 MAX_LABEL_BYTES = 80
 #: a scenario file larger than this is refused before it is parsed (every YAML file's limit)
@@ -158,6 +160,14 @@ class Scenario(_Strict):
         if any(c in value for c in "/\\\x00") or value in (".", ".."):
             raise ValueError(
                 "must not contain '/' or '\\' (it names the run folder); use e.g. 'a-b'"
+            )
+        if not value.isprintable():
+            raise ValueError("must be printable text on one line (it names the run folder)")
+        size = len(value.encode("utf-8", "surrogatepass"))
+        if size > MAX_NAME_BYTES:
+            raise ValueError(
+                f"must be at most {MAX_NAME_BYTES} bytes in UTF-8 (it names the run folder; "
+                f"got {size} bytes); shorten it"
             )
         return value
 

@@ -103,10 +103,19 @@ def build_world(scenario: Scenario, rng: np.random.Generator) -> World:
                     f"{src}: {field}: got {params[key]!r}; it must be a file path string "
                     "(e.g. ../shared/maps/grass.png)"
                 )
-            resolved = scenario.resolve_path(params[key])
-            if not resolved.exists():
+            shown = _short(params[key], 80)
+            try:
+                resolved = scenario.resolve_path(params[key])
+                found = resolved.exists()
+            except (OSError, ValueError) as exc:  # a name too long, a NUL byte
+                reason = getattr(exc, "strerror", None) or "not a usable path"
                 raise ScenarioError(
-                    f"{src}: {field}: {params[key]}: file not found beside the scenario "
+                    f"{src}: {field}: {shown} is not a usable file path ({reason}); give a "
+                    "shorter path to the map or point file"
+                ) from None
+            if not found:
+                raise ScenarioError(
+                    f"{src}: {field}: {shown}: file not found beside the scenario "
                     f"({scenario.base_dir}) or from the current directory; give a path "
                     "relative to one of them or an absolute one"
                 )

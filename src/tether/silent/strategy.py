@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from tether import floats
 from tether.config import MAX_LENGTH_M, Coordinate, Scenario, finite_strict
@@ -50,6 +50,18 @@ class TrajectoryParams(BaseModel):
         if self.kind == "waypoints" and self.function is not None:
             raise ValueError("'function' is used only with kind 'function'; remove it")
         return self
+
+    @field_validator("waypoints")
+    @classmethod
+    def _same_dimension(cls, value: list[list[float]] | None) -> list[list[float]] | None:
+        sizes = [len(p) for p in value or []]
+        if len(set(sizes)) > 1:
+            k = next(i for i, n in enumerate(sizes) if n != sizes[0])
+            raise ValueError(
+                f"waypoint {k} has {sizes[k]} coordinates and waypoint 0 has {sizes[0]}; give "
+                "every waypoint the world's dimension"
+            )
+        return value
 
 
 class SilentParams(BaseModel):

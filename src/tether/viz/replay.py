@@ -164,16 +164,45 @@ class _OneFileHandler(http.server.BaseHTTPRequestHandler):
         pass
 
 
-def make_server(path: str | Path, port: int = 0) -> http.server.ThreadingHTTPServer:
-    """An HTTP server for one replay file, bound to 127.0.0.1 only (``port`` 0: any free)."""
+def bind_server(port: int = 0) -> http.server.ThreadingHTTPServer:
+    """An HTTP server bound to 127.0.0.1 (``port`` 0: any free one), serving nothing yet.
+
+    Raises
+    ------
+    TetherError
+        The port is in use or not allowed: one line with the fix.
+    """
+    handler = type("Handler", (_OneFileHandler,), {"body": b"", "name": "replay.html"})
+    try:
+        return http.server.ThreadingHTTPServer(("127.0.0.1", port), handler)
+    except OSError as exc:
+        raise TetherError(
+            f"--port {port}: cannot serve on 127.0.0.1:{port} ({exc.strerror or exc}); choose "
+            "another --port, or --port 0 for any free one"
+        ) from None
+
+
+def make_server(
+    path: str | Path, port: int = 0, server: http.server.ThreadingHTTPServer | None = None
+) -> http.server.ThreadingHTTPServer:
+    """An HTTP server for one replay file, bound to 127.0.0.1 only (``port`` 0: any free);
+    ``server`` from :func:`bind_server` is used if given (bound before the file was made)."""
     file = Path(path)
-    handler = type("Handler", (_OneFileHandler,), {"body": file.read_bytes(), "name": file.name})
-    return http.server.ThreadingHTTPServer(("127.0.0.1", port), handler)
+    server = bind_server(port) if server is None else server
+    server.RequestHandlerClass.body = file.read_bytes()  # type: ignore[attr-defined]
+    server.RequestHandlerClass.name = file.name  # type: ignore[attr-defined]
+    return server
 
 
-def serve(path: str | Path, port: int = 0, *, announce: Any = print) -> None:
+def serve(
+    path: str | Path,
+    port: int = 0,
+    *,
+    announce: Any = print,
+    server: http.server.ThreadingHTTPServer | None = None,
+) -> None:
     """Serve a replay on 127.0.0.1 until interrupted (Ctrl-C)."""
-    server = make_server(path, port)
+    server = make_server(path, port, server)
     host, real_port = server.server_address[:2]
     announce(f"serving {path} at http://{host}:{real_port}/ (127.0.0.1 only; Ctrl-C stops)")
     thread = threading.Thread(target=server.serve_forever, daemon=True)

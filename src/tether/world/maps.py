@@ -292,6 +292,13 @@ def _layers(
     )
     occupied = _to_grid_layout(occupied)
     unknown = _to_grid_layout(unknown)
+    width_m = resolution * max(occupied.shape)
+    if width_m > MAX_LENGTH_M:
+        raise MapError.at(
+            meta["source"], "resolution",
+            f"{resolution:g} m per cell makes the map {width_m:.3g} m wide, more than "
+            f"{MAX_LENGTH_M:g} m; give a resolution in metres per cell, e.g. 0.05",
+        )  # fmt: skip
     grid = OccupancyGrid(occupied | unknown, resolution, origin)
     meta.update(occupied_thresh=occ_th, free_thresh=free_th, negate=negate)
     return MapLayers(grid=grid, occupied=occupied, unknown=unknown, meta=meta)
