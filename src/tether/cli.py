@@ -87,13 +87,18 @@ def run(
     from tether.runner import run as run_scenario
 
     sc = _load(scenario, set_)
-    _check_sweep_block(scenario, set_, sc)  # what `validate` refuses, `run` refuses
     out.print(
         f"running {sc.name} ({sc.strategy.name}, {sc.team.n_robots} robots) ...",
         markup=False,
         highlight=False,
     )
-    outcome = run_scenario(sc, out_dir=out_dir, seed=seed, figures=False if no_figures else None)
+    outcome = run_scenario(
+        sc,
+        out_dir=out_dir,
+        seed=seed,
+        figures=False if no_figures else None,
+        check=lambda: _check_sweep_block(scenario, set_, sc),  # what `validate` refuses, too
+    )
     s = outcome.summary
     keys = [
         "steps",

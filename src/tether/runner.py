@@ -13,6 +13,7 @@ import copy
 import datetime as dt
 import inspect
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -367,12 +368,15 @@ def run(
     out_dir: str | Path | None = None,
     seed: int | None = None,
     figures: bool | None = None,
+    check: Callable[[], None] | None = None,
 ) -> RunOutcome:
     """Run one scenario and write its run folder; returns the folder and the summary.
 
     The folder is committed as a whole (:class:`tether.runfolder.RunFolder`):
     ``summary.json`` is written last, and the folder appears at ``out_dir``
-    only when the run and its figures are complete.
+    only when the run and its figures are complete. ``check`` is called after the
+    scenario is built and before anything is written (the command line checks there
+    what ``tether validate`` checks beyond :func:`build`, in the same order).
     """
     scenario = as_scenario(scenario)
     seed = check_seed(seed)
@@ -386,6 +390,8 @@ def run(
         scenario._source, scenario._base_dir = source, base_dir
     seed = scenario.seed
     built = build(scenario, seed)
+    if check is not None:
+        check()
     path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
     folder = RunFolder(path)
     try:

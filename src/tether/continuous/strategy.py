@@ -129,7 +129,7 @@ class ConnectivityStrategyParams(_Strict):
     def _apply_preset(cls, data: Any) -> Any:
         if isinstance(data, dict):
             preset = data.get("preset", "outdoor")
-            if preset in TABLE2:
+            if isinstance(preset, str) and preset in TABLE2:
                 data = {**TABLE2[preset], **data}
         return data
 
