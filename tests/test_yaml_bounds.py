@@ -111,11 +111,20 @@ def test_an_oversized_map_yaml_is_refused_before_it_is_read(tmp_path, monkeypatc
             "nested",
         ),  # fmt: skip
         ("a: !!python/name:os.system\n", "remove the tag"),
+        ("sweep: {zip: [[a, !!set {x: null}]]}\n", "tag !!set is not plain data"),
+        ("a: !!binary aGk=\n", "tag !!binary"),
+        ("a: !!timestamp 2001-12-14\n", "tag !!timestamp"),
+        ("a: !mine x\n", "tag !mine"),
     ],
 )
 def test_scenario_yaml_is_bounded_and_strict(text, needle):
     with pytest.raises(ScenarioError, match=needle):
         parse_yaml(text, "s.yaml")
+
+
+def test_plain_tags_are_read_and_dates_stay_text():
+    text = "a: !!str 5\nb: !!float 1\nc: 2001-12-14\nd: !!int '7'\n"
+    assert parse_yaml(text, "s.yaml") == {"a": "5", "b": 1.0, "c": "2001-12-14", "d": 7}
 
 
 def test_merge_keys_may_be_overridden_without_being_duplicates():

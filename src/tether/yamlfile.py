@@ -97,6 +97,30 @@ class YamlLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
+#: the tags of plain data; any other (``!!set``, ``!!binary``, ``!!timestamp``, a Python
+#: tag, a custom ``!tag``) is refused: tether reads numbers, text, lists and mappings
+PLAIN_TAGS = frozenset(
+    f"tag:yaml.org,2002:{t}" for t in ("str", "int", "float", "bool", "null", "seq", "map")
+)
+
+
+def _construct_plain(self: YamlLoader, node: Node, deep: bool = False) -> Any:
+    if node.tag not in PLAIN_TAGS:
+        tag = node.tag.replace("tag:yaml.org,2002:", "!!")
+        problem = (
+            f"tag {tag} is not plain data (tether reads numbers, text, lists and mappings); "
+            "remove the tag"
+        )
+        raise ConstructorError(None, None, problem, node.start_mark)
+    return yaml.SafeLoader.construct_object(self, node, deep=deep)
+
+
+YamlLoader.construct_object = _construct_plain  # type: ignore[method-assign]
+# dates stay text (YAML 1.2's core schema): no implicit timestamps
+YamlLoader.yaml_implicit_resolvers = {
+    first: [(tag, rx) for tag, rx in resolvers if tag != "tag:yaml.org,2002:timestamp"]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
 YamlLoader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
     re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$"),
