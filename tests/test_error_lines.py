@@ -12,7 +12,7 @@ import pytest
 import yaml
 from PIL import Image
 
-from _cli import tether
+from _cli import one_error_line, tether
 from tether import runner
 from tether.config import load_scenario
 
@@ -21,13 +21,7 @@ MAX_LINE = 400
 
 
 def one_line(code: int, err: str, *needles: str) -> str:
-    assert code == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), err
-    assert "internal error" not in lines[0] and len(lines[0]) <= MAX_LINE, lines[0]
-    for needle in needles:
-        assert needle in lines[0], lines[0]
-    return lines[0]
+    return one_error_line(code, err, *needles, max_length=MAX_LINE)
 
 
 def base(steps: int = 3) -> dict:

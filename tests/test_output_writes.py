@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from _cli import tether
+from _cli import one_error_line, tether
 from tether.config import load_scenario
 from tether.runfolder import read_marker
 from tether.runner import run
@@ -33,16 +33,6 @@ def run_dir(tmp_path_factory) -> Path:
     return run(sc, out_dir=tmp_path_factory.mktemp("runs") / "run").path
 
 
-def one_line(code: int, err: str, *needles: str) -> str:
-    assert code == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), err
-    assert "internal error" not in lines[0]
-    for needle in needles:
-        assert needle in lines[0], lines[0]
-    return lines[0]
-
-
 def leftovers(folder: Path) -> list[str]:
     return [p.name for p in folder.iterdir() if p.name.endswith(".tmp") or "staging" in p.name]
 
@@ -58,10 +48,10 @@ def test_a_link_at_the_output_is_refused_and_its_target_untouched(
     link.symlink_to(precious)
     try:
         code, _, err = tether(capsys, command, str(run_dir), *args)
-        one_line(code, err, name, "symbolic link")
+        one_error_line(code, err, name, "symbolic link")
         assert precious.read_text() == "my thesis" and link.is_symlink()
         code, _, err = tether(capsys, command, str(run_dir), *args, "--out", str(link))
-        one_line(code, err, "symbolic link")
+        one_error_line(code, err, "symbolic link")
         assert precious.read_text() == "my thesis"
     finally:
         link.unlink()
@@ -114,7 +104,7 @@ def test_a_disk_that_fills_up_leaves_the_previous_file_and_one_line(command, run
         capture_output=True, text=True, timeout=300, preexec_fn=_limited(2000),
         env=dict(os.environ, TETHER_JIT="0"),
     )  # fmt: skip
-    one_line(proc.returncode, proc.stderr, str(target), "cannot write")
+    one_error_line(proc.returncode, proc.stderr, str(target), "cannot write")
     assert target.read_bytes() == b"previous complete file"  # never a truncated file
     assert leftovers(tmp_path) == []
 
@@ -131,5 +121,5 @@ def test_a_folder_that_cannot_be_written_is_one_line(command, run_dir, tmp_path,
     monkeypatch.setattr(tempfile, "mkdtemp", read_only)
     args, name = OUTPUTS[command]
     code, _, err = tether(capsys, command, str(run_dir), *args, "--out", str(tmp_path / name))
-    one_line(code, err, "Permission denied")
+    one_error_line(code, err, "Permission denied")
     assert not (tmp_path / name).exists()

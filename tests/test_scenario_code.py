@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from _cli import tether
+from _cli import one_error_line, tether
 from tether.config import load_scenario
 from tether.errors import ScenarioError
 from tether.runner import build, run
@@ -34,16 +34,6 @@ def write(tmp_path: Path, spec: str) -> Path:
     path = tmp_path / "shared.yaml"
     path.write_text(yaml.safe_dump(scenario_with_function(spec)))
     return path
-
-
-def one_error_line(code: int, err: str, *needles: str) -> str:
-    assert code == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), err
-    assert "internal error" not in lines[0]
-    for needle in needles:
-        assert needle in lines[0], lines[0]
-    return lines[0]
 
 
 @pytest.mark.parametrize("spec", ["sys:exit", "code:interact", "os:_exit", "builtins:input",

@@ -16,7 +16,7 @@ import pytest
 import yaml
 from PIL import Image
 
-from _cli import tether
+from _cli import one_error_line, tether
 from tether.config import load_scenario
 from tether.errors import MapError, ScenarioError
 from tether.yamlfile import MAX_YAML_BYTES, MAX_YAML_DEPTH, parse_yaml, read_yaml
@@ -25,16 +25,6 @@ BOMB = "\n".join(
     ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
     + [f"a{k}: &a{k} [{', '.join([f'*a{k - 1}'] * 10)}]" for k in range(1, 9)]
 )  # 10**9 values once expanded, a few hundred bytes of text
-
-
-def one_line(code: int, err: str, *needles: str) -> str:
-    assert code == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), err
-    assert "internal error" not in lines[0] and "Traceback" not in err
-    for needle in needles:
-        assert needle in lines[0], lines[0]
-    return lines[0]
 
 
 def map_scenario(tmp_path: Path, map_yaml_text: str) -> Path:
@@ -61,7 +51,7 @@ def test_an_alias_bomb_in_a_map_yaml_is_refused_quickly(tmp_path):
         [sys.executable, "-m", "tether.cli", "validate", str(path)],
         capture_output=True, text=True, timeout=120, cwd=tmp_path,
     )  # fmt: skip
-    one_line(proc.returncode, proc.stderr, "room.yaml", "alias")
+    one_error_line(proc.returncode, proc.stderr, "room.yaml", "alias")
 
 
 @pytest.mark.parametrize(
@@ -75,9 +65,9 @@ def test_an_alias_bomb_in_a_map_yaml_is_refused_quickly(tmp_path):
 def test_a_bad_map_yaml_is_one_line(tmp_path, capsys, text, needle):
     path = map_scenario(tmp_path, text)
     code, _, err = tether(capsys, "validate", str(path))
-    one_line(code, err, "room.yaml", needle)
+    one_error_line(code, err, "room.yaml", needle)
     code, _, err_run = tether(capsys, "run", str(path), "--out", str(tmp_path / "o"))
-    assert one_line(code, err_run) == err.strip()
+    assert one_error_line(code, err_run) == err.strip()
 
 
 def test_the_good_map_yaml_validates(tmp_path, capsys):
@@ -138,11 +128,11 @@ def test_duplicate_keys_in_a_scenario_file_and_in_set_are_one_line(tmp_path, cap
     text = yaml.safe_dump(data) + "seed: 3\n"  # seed given twice
     path.write_text(text)
     code, _, err = tether(capsys, "validate", str(path))
-    line = one_line(code, err, "dup.yaml", "'seed' is given twice")
+    line = one_error_line(code, err, "dup.yaml", "'seed' is given twice")
     code, _, err = tether(capsys, "run", str(path), "--out", str(tmp_path / "o"))
-    assert one_line(code, err) == line and not (tmp_path / "o").exists()
+    assert one_error_line(code, err) == line and not (tmp_path / "o").exists()
     code, _, err = tether(capsys, "validate", "silent_demo", "--set", "sim={dt_s: 1, dt_s: 2}")
-    one_line(code, err, "--set sim", "given twice")
+    one_error_line(code, err, "--set sim", "given twice")
 
 
 def test_a_sweep_folder_with_a_bomb_in_sweep_yaml_does_not_hang(tmp_path):

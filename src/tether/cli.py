@@ -15,7 +15,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from tether.config import MAX_SEED
+from tether.config import MAX_SEED, Scenario
 from tether.errors import TetherError
 
 app = typer.Typer(
@@ -53,7 +53,9 @@ def _load(scenario: str, overrides: list[str] | None, quick: bool = False):
     return load_scenario_at(scenario, quick=quick, overrides=overrides)
 
 
-def _check_sweep_block(scenario: str, overrides: list[str] | None, sc, quick: bool = False) -> int:
+def _check_sweep_block(
+    scenario: str, overrides: list[str] | None, sc: Scenario, quick: bool = False
+) -> int:
     """Every combination of the sweep block builds, and the quick size's keys and values
     are valid (what ``validate`` checks beyond ``build``); the number of combinations."""
     from tether.experiments.plan import check_combinations
