@@ -246,6 +246,7 @@ CASES: dict[str, Case] = {
         "team.init.extent_m",
         _all(
             _set("team.n_robots", 1_000_000),
+            _set("sim.max_steps", 1),  # records that fit: the links are what cannot
             _set("team.init", {"kind": "uniform", "extent_m": [40.0, 40.0]}),
         ),
     ),

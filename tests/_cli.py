@@ -17,3 +17,17 @@ def tether(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, st
         code = 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 1
     captured = capsys.readouterr()
     return code, captured.out, captured.err
+
+
+def one_error_line(code: int, err: str, *needles: str, max_length: int | None = None) -> str:
+    """The one ``error:`` line of a refusal (exit code 2, no traceback, no internal error)
+    that holds every needle; fails the test otherwise."""
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), err
+    assert "internal error" not in lines[0] and "Traceback" not in err, err
+    if max_length is not None:
+        assert len(lines[0]) <= max_length, lines[0]
+    for needle in needles:
+        assert needle in lines[0], f"{needle!r} not in {lines[0]!r}"
+    return lines[0]

@@ -203,12 +203,15 @@ def test_rerun_into_the_same_out_replaces_the_folder(tmp_path, capsys, monkeypat
     code, _, err = tether(capsys, "run", "a.yaml", "--out", "out")
     assert code == 0, err
     assert (tmp_path / "out" / "figures" / "links.png").exists()
-    (tmp_path / "out" / "stray.txt").write_text("left by hand")
     code, _, err = tether(capsys, "run", "a.yaml", "--out", "out", "--no-figures")
     assert code == 0, err
     names = {p.name for p in (tmp_path / "out").iterdir()}
-    assert "figures" not in names and "stray.txt" not in names
+    assert "figures" not in names
     assert "summary.json" in names
+    (tmp_path / "out" / "stray.txt").write_text("left by hand")  # the user's: never deleted
+    code, _, err = tether(capsys, "run", "a.yaml", "--out", "out")
+    assert_one_line(code, err, "stray.txt", "did not write")
+    assert (tmp_path / "out" / "stray.txt").read_text() == "left by hand"
 
 
 def test_a_failed_run_leaves_no_folder(tmp_path, capsys, monkeypatch):

@@ -18,7 +18,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from tether.config import MAX_SEED
+from tether.config import MAX_SEED, Scenario
 from tether.errors import TetherError, TetherWarning
 from tether.interrupts import Stopped, stop_on_signals
 from tether.terminal.help import flow, summary
@@ -118,6 +118,21 @@ def _load_plugins(plugins: list[str] | None) -> None:
     load_plugins(plugins)
 
 
+def _check_sweep_block(
+    scenario: str, overrides: list[str] | None, sc: Scenario, quick: bool = False
+) -> int:
+    """Every combination of the sweep block builds, and the quick size's keys and values
+    are valid (what ``validate`` checks beyond ``build``); the number of combinations."""
+    from tether.experiments.plan import check_combinations
+    from tether.runner import check_sweep, strategy_class
+
+    n_combos = check_combinations(sc)
+    if not quick and "quick" in sc.sweep:
+        small = _load(scenario, overrides, quick=True)
+        check_sweep(small, strategy_class(small))
+    return n_combos
+
+
 @app.command()
 def run(
     scenario: ScenarioArg = DEFAULT_SCENARIO,
@@ -149,8 +164,11 @@ def run(
     steps = None if quiet else StepProgress(out, say, sc.sim.max_steps)
     try:
         with noting("no run folder was written"):
-            outcome = run_scenario(sc, out_dir=out_dir, seed=seed, progress=steps,
-                                   figures=False if no_figures else None)  # fmt: skip
+            outcome = run_scenario(
+                sc, out_dir=out_dir, seed=seed, progress=steps,
+                figures=False if no_figures else None,
+                check=lambda: _check_sweep_block(scenario, set_, sc),  # what validate refuses
+            )  # fmt: skip
     finally:
         if steps is not None:
             steps.stop()
@@ -307,20 +325,24 @@ def validate(
     too (its keys and values); --quick checks the quick size as fully as the full one.
     """
     _load_plugins(plugin)
-    from tether.experiments.plan import check_combinations
+    from tether.limits import format_bytes
     from tether.runfolder import check_writable
-    from tether.runner import build, check_sweep, strategy_class
+    from tether.runner import build, strategy_class, strategy_params
+    from tether.usercode import code_references
 
     sc = _load(scenario, set_, quick)
-    build(sc)
-    n_combos = check_combinations(sc)  # every combination of the sweep block builds
-    if not quick and "quick" in sc.sweep:  # the quick size's keys and axis values
-        small = _load(scenario, set_, quick=True)
-        check_sweep(small, strategy_class(small))
+    need = build(sc).memory_bytes
+    calls = code_references(strategy_params(sc, strategy_class(sc)), "strategy.params.")
+    n_combos = _check_sweep_block(scenario, set_, sc, quick)
     check_writable(sc.output.dir)  # where `tether run` would write (without --out)
     size = ", quick size" if quick else ""
     swept = f", sweep of {count(n_combos, 'combination')}{size}" if n_combos else size
-    say(f"{scenario}: ok ({sc.strategy.name}, {count(sc.team.n_robots, 'robot')}{swept})")
+    say(
+        f"{scenario}: ok ({sc.strategy.name}, {count(sc.team.n_robots, 'robot')}{swept}); "
+        f"memory about {format_bytes(need)}"
+    )
+    for field, spec in calls:  # code the scenario names (only ever from loaded modules)
+        say(f"  calls {spec} ({field})")
 
 
 @app.command("list")
@@ -444,7 +466,9 @@ def main(argv: list[str] | None = None) -> None:
     warnings.showwarning = _show_warning
     args = sys.argv[1:] if argv is None else list(argv)
     try:
-        with stop_on_signals():
+        with stop_on_signals(), warnings.catch_warnings():
+            if not os.environ.get("TETHER_DEBUG"):  # one line on stderr: no numpy warning
+                warnings.simplefilter("ignore", RuntimeWarning)
             code = app(args=args or ["--help"], prog_name="tether", standalone_mode=False)
         if isinstance(code, int) and code == 130:  # typer's KeyboardInterrupt, no handler
             raise Stopped(signal.SIGINT)

@@ -16,7 +16,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -31,6 +30,10 @@ from tether.suggest import did_you_mean, keys_at
 from tether.sweepspec import MAX_SWEEP_COMBINATIONS as MAX_SWEEP_COMBINATIONS  # re-exported
 from tether.sweepspec import MAX_SWEEP_TRIALS as MAX_SWEEP_TRIALS  # re-exported
 from tether.sweepspec import SweepError, SweepSpec, parse_sweep
+from tether.yamlfile import MAX_YAML_BYTES, read_yaml
+from tether.yamlfile import MAX_YAML_VALUES as MAX_YAML_VALUES  # re-exported
+from tether.yamlfile import YamlLoader as YamlLoader  # re-exported
+from tether.yamlfile import parse_yaml as parse_yaml  # re-exported
 
 BUILTIN_PACKAGE = "tether.scenarios"
 
@@ -43,12 +46,12 @@ MAX_DT_S = 86_400.0
 MAX_ROBOTS = 1_000_000
 MAX_STEPS = 100_000_000
 MAX_SEED = 2**63 - 1
+#: the longest scenario name, in bytes of UTF-8 (run folder names must stay under 255 bytes)
+MAX_NAME_BYTES = 100
 #: a run folder name part longer than this (bytes) is shortened and given a hash
 MAX_LABEL_BYTES = 80
-#: a scenario file larger than this is refused before it is parsed
-MAX_SCENARIO_BYTES = 16 * 2**20
-#: YAML aliases may repeat values, but the expanded document holds at most this many
-MAX_YAML_VALUES = 1_000_000
+#: a scenario file larger than this is refused before it is parsed (every YAML file's limit)
+MAX_SCENARIO_BYTES = MAX_YAML_BYTES
 
 #: a coordinate in metres (finite, within +-MAX_LENGTH_M)
 Coordinate = Annotated[float, Field(ge=-MAX_LENGTH_M, le=MAX_LENGTH_M, allow_inf_nan=False)]
@@ -159,6 +162,14 @@ class Scenario(_Strict):
         if any(c in value for c in "/\\\x00") or value in (".", ".."):
             raise ValueError(
                 "must not contain '/' or '\\' (it names the run folder); use e.g. 'a-b'"
+            )
+        if not value.isprintable():
+            raise ValueError("must be printable text on one line (it names the run folder)")
+        size = len(value.encode("utf-8", "surrogatepass"))
+        if size > MAX_NAME_BYTES:
+            raise ValueError(
+                f"must be at most {MAX_NAME_BYTES} bytes in UTF-8 (it names the run folder; "
+                f"got {size} bytes); shorten it"
             )
         return value
 
@@ -275,101 +286,9 @@ def paper_campaigns() -> list[str]:
     return sorted(f"paper/{f.name[:-5]}" for f in files if f.name.endswith(".yaml"))
 
 
-def _yaml_problem(exc: yaml.YAMLError) -> str:
-    """A YAML parser error in one line: where and what."""
-    mark = getattr(exc, "problem_mark", None)
-    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-    problem = getattr(exc, "problem", None) or getattr(exc, "reason", None) or "invalid YAML"
-    return " ".join(f"not valid YAML{where}: {problem}".split())
-
-
-def _check_expansion(data: Any, label: str) -> None:
-    """Refuse YAML whose aliases expand beyond :data:`MAX_YAML_VALUES` values, or loop.
-
-    PyYAML builds an alias as a reference to one object, so a "billion laughs"
-    document loads in kilobytes and explodes only when copied or validated.
-    Sizes are counted once per distinct object (linear in the document), and
-    the top-level key holding the expansion is named.
-    """
-    sizes: dict[int, int] = {}
-    active: set[int] = set()
-
-    def size(obj: Any, field: str) -> int:
-        if isinstance(obj, dict):
-            children: Any = [*obj.keys(), *obj.values()]
-        elif isinstance(obj, list):
-            children = obj
-        else:
-            return 1
-        key = id(obj)
-        if key in sizes:
-            return sizes[key]
-        if key in active:
-            raise ScenarioError(
-                f"{label}: {field}: a YAML alias refers to a value that contains it (a loop); "
-                "write the value out"
-            )
-        active.add(key)
-        total = 1
-        for child in children:
-            total += size(child, field)
-            if total > MAX_YAML_VALUES:
-                raise ScenarioError(
-                    f"{label}: {field}: YAML aliases expand to more than {MAX_YAML_VALUES:,} "
-                    "values (an alias bomb?); write the values out or use fewer aliases"
-                )
-        active.discard(key)
-        sizes[key] = total
-        return total
-
-    try:
-        if isinstance(data, dict):
-            for key, value in data.items():
-                size(value, str(key))
-        else:
-            size(data, "(top level)")
-    except RecursionError:
-        raise ScenarioError(
-            f"{label}: (top level): values are nested too deeply; flatten the document"
-        ) from None
-
-
-class YamlLoader(yaml.SafeLoader):
-    """PyYAML's safe loader, with YAML 1.2's exponent floats (``1e-6``, ``2.5e3``): YAML
-    1.1, which PyYAML follows, reads them as strings unless they have a dot and a sign."""
-
-
-YamlLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
-
-
-def parse_yaml(text: str | bytes, label: str) -> Any:
-    """``yaml.safe_load`` bounded in time and memory, with one-line errors naming ``label``
-    (exponent floats as in YAML 1.2: :class:`YamlLoader`)."""
-    try:
-        data = yaml.load(text, Loader=YamlLoader)  # noqa: S506 (a SafeLoader)
-    except yaml.YAMLError as exc:
-        raise ScenarioError(f"{label}: {_yaml_problem(exc)}") from None
-    except RecursionError:
-        raise ScenarioError(
-            f"{label}: (top level): values are nested too deeply; flatten the document"
-        ) from None
-    _check_expansion(data, label)
-    return data
-
-
 def _read_yaml(path: Path, label: str) -> dict[str, Any]:
     try:
-        if path.is_file() and path.stat().st_size > MAX_SCENARIO_BYTES:
-            raise ScenarioError(
-                f"{label}: file is {path.stat().st_size / 2**20:.0f} MiB; a scenario file may "
-                f"be at most {MAX_SCENARIO_BYTES // 2**20} MiB (put large data in a map or "
-                "point file)"
-            )
-        raw = path.read_bytes()
+        data = read_yaml(path, label, what="a scenario file")
     except FileNotFoundError:
         names = ", ".join(builtin_scenarios())
         hint = did_you_mean(Path(str(label)).stem, [*builtin_scenarios(), *paper_campaigns()])
@@ -383,14 +302,6 @@ def _read_yaml(path: Path, label: str) -> dict[str, Any]:
         raise ScenarioError(f"{label}: is a folder; give a scenario YAML file") from None
     except OSError as exc:
         raise ScenarioError(f"{label}: cannot read file ({exc.strerror or exc})") from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(
-            f"{label}: not UTF-8 text (byte {raw[exc.start]:#04x} at offset {exc.start}); "
-            "save the scenario as UTF-8"
-        ) from None
-    data = parse_yaml(text, label)
     if not isinstance(data, dict):
         raise ScenarioError(f"{label}: (top level): expected a mapping of scenario keys")
     return data

@@ -9,12 +9,14 @@ the time. :func:`enabled` decides, from ``TETHER_JIT``:
 * ``0`` (or ``off``): the reference (numpy) paths everywhere;
 * ``1`` (or ``on``): the kernels whenever numba is importable (compiled on first use);
 * ``auto`` (the default): the reference paths first; once the process has spent
-  ``TETHER_JIT_AFTER_S`` seconds (default 2) since its first hot-path call, the kernels
-  -- if numba's cache already holds them. Starting numba costs about a second and
-  compiling the kernels a minute or more, so a short run never pays either; a long run
-  switches after two seconds. When the cache is cold, a background process
-  (``python -m tether.continuous.kernels``, low priority) compiles it, and this process
-  keeps the reference paths until the background process is done.
+  ``TETHER_JIT_AFTER_S`` seconds (default 2) since its first hot-path call, the kernels.
+  Starting numba costs about a second, so a short run never pays it; a long run
+  switches after two seconds. When numba's cache does not hold the kernels yet, this
+  process compiles them then, once, with a line on stderr saying so (a child process,
+  ``python -m tether.continuous.kernels``, that the command waits for and that dies with
+  it: nothing keeps running after tether exits), and later runs load them from the
+  cache. ``python -m tether.continuous.kernels`` compiles them ahead of time. While
+  another process compiles, this one keeps the reference paths.
 
 Paths every strategy shares (line of sight of the sensing graph, team metrics) use
 their kernel only when numba is already loaded (:func:`warm`), so ``silent`` and
@@ -64,6 +66,10 @@ KERNEL_MODULES = (
     "sensing/depth_kernels.py",
     "sensing/draws_kernels.py",
 )
+
+#: the child process that compiles every kernel into numba's cache (the marker's path is
+#: appended; the kernels module's warm-up writes the marker itself and ignores it)
+COMPILE_COMMAND = [sys.executable, "-m", "tether.continuous.kernels"]
 
 _forced: bool | None = None
 _mode: str | None = None
@@ -176,30 +182,97 @@ def marker() -> Path:
 
 
 def _cache_ready(now: float) -> bool:
-    """True if the marker exists; else start the background warm-up (once) and say no."""
+    """True if the kernels are in numba's cache; else compile them now (once per process)."""
     global _next_check, _spawned
     _next_check = now + 5.0  # a stat every five seconds at most
     path = marker()
     if path.exists():
         return True
-    if not _spawned:
-        _spawned = True
-        lock = path.with_suffix(".lock")
+    if _spawned:
+        return False
+    _spawned = True
+    return compile_kernels(path)
+
+
+def _take_lock(lock: Path) -> bool:
+    """Create ``lock`` holding this process id; False while another live process holds it."""
+    for _ in range(2):
         try:
-            if lock.exists() and time.time() - lock.stat().st_mtime < 1800:
-                return False  # another process is compiling
-            lock.parent.mkdir(parents=True, exist_ok=True)
-            lock.write_text(str(os.getpid()))
-            env = dict(os.environ)
-            src = str(Path(__file__).resolve().parents[1])
-            env["PYTHONPATH"] = os.pathsep.join([src, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-            cmd = [sys.executable, "-m", "tether.continuous.kernels"]  # its warm_up()
-            subprocess.Popen(cmd, env=env, start_new_session=True,
-                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)  # fmt: skip
-        except OSError:
-            pass
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            try:
+                holder = int(lock.read_text().strip() or "0")
+                fresh = time.time() - lock.stat().st_mtime < 1800
+            except (OSError, ValueError):
+                holder, fresh = 0, False
+            if holder > 0 and fresh and _alive(holder):
+                return False
+            lock.unlink(missing_ok=True)  # left by a process that died
+            continue
+        with os.fdopen(fd, "w") as fh:
+            fh.write(str(os.getpid()))
+        return True
     return False
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process
+        return True
+    return True
+
+
+def compile_kernels(path: Path | None = None) -> bool:
+    """Compile every kernel into numba's cache in a child process, waiting for it.
+
+    The child (``python -m tether.continuous.kernels``) is killed if this process stops
+    waiting (an exception, Ctrl-C) and by the kernel if this process dies
+    (:func:`tether.lifetime.kill_on_parent_death`). A line on stderr says what happens.
+    Returns True when the kernels are compiled.
+    """
+    from tether.lifetime import kill_on_parent_death, prctl_function
+
+    prctl_function()  # looked up here, so that the child only calls it
+    path = marker() if path is None else path
+    lock = path.with_suffix(".lock")
+    try:
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        if not _take_lock(lock):
+            return False  # another process compiles: the reference paths until it is done
+    except OSError:
+        return False
+    start = time.perf_counter()
+    _say("tether: compiling the numba kernels once (about a minute; later runs reuse them) ...")
+    proc = None
+    try:
+        env = dict(os.environ)
+        src = str(Path(__file__).resolve().parents[1])
+        env["PYTHONPATH"] = os.pathsep.join([src, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+        proc = subprocess.Popen(COMPILE_COMMAND + [str(path)], env=env, stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                preexec_fn=kill_on_parent_death)  # fmt: skip
+        proc.wait()
+    except OSError:
+        pass
+    finally:
+        if proc is not None and proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        lock.unlink(missing_ok=True)
+    ok = path.exists()
+    seconds = time.perf_counter() - start
+    if ok:
+        _say(f"tether: kernels compiled in {seconds:.0f} s")
+    else:
+        _say(f"tether: compiling the kernels failed after {seconds:.0f} s; numpy paths run")
+    return ok
+
+
+def _say(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
 
 
 def write_marker(seconds: float) -> None:

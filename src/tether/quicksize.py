@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from tether.config import (
+    MAX_NAME_BYTES,
     Scenario,
     apply_overrides,
     read_scenario_data,
@@ -28,7 +29,6 @@ __all__ = ["QUICK_SUFFIX", "load_scenario_at", "quick_data"]
 
 #: appended to the scenario name (and the default sweep folder) of the quick size
 QUICK_SUFFIX = "-quick"
-_MAX_NAME = 100
 
 
 def quick_data(data: dict[str, Any], label: str, base_dir: Path | None = None) -> dict[str, Any]:
@@ -58,7 +58,9 @@ def quick_data(data: dict[str, Any], label: str, base_dir: Path | None = None) -
         set_dotted(out, key, value)
     out["sweep"] = quick
     name = str(out.get("name", "scenario"))
-    out["name"] = name[: _MAX_NAME - len(QUICK_SUFFIX)] + QUICK_SUFFIX
+    while name and len((name + QUICK_SUFFIX).encode("utf-8", "surrogatepass")) > MAX_NAME_BYTES:
+        name = name[:-1]
+    out["name"] = name + QUICK_SUFFIX
     try:
         scenario_from_dict(out, label, base_dir)
     except ScenarioError as exc:

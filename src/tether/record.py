@@ -23,9 +23,11 @@ from typing import Any
 
 import numpy as np
 
+from tether.errors import ScenarioError
+from tether.limits import format_bytes, memory_budget_bytes
 from tether.runfolder import provenance
-from tether.sensing import Observation
-from tether.sim import RunResult, StepRecord, TeamState
+from tether.sensing import Observation, SensorModel
+from tether.sim import RunResult, StepRecord, Strategy, TeamState
 
 #: summary keys every run has; a strategy metric with one of these names gets a prefix
 CORE_KEYS = ("scenario", "strategy", "seed", "n_robots", "dim", "sim_time_s", "steps",
@@ -153,3 +155,80 @@ def summarize(scenario: Any, seed: int, result: RunResult, wall_time_s: float) -
     reserved = set(CORE_KEYS) | {"provenance"}
     own = {f"strategy_{k}" if k in reserved else k: v for k, v in result.strategy_metrics.items()}
     return {**core, **own, "provenance": provenance()}
+
+
+# --------------------------------------------------------------------------- memory
+
+
+def record_bytes(steps: int, recorded: int, n: int, dim: int, links: int) -> float:
+    """Bytes the recorder keeps: per-step records, positions and links of recorded steps."""
+    records = steps * 400.0  # a StepRecord and its values per step
+    records += recorded * n * (dim + 2) * 8 * 2  # positions, then their table columns
+    records += recorded * links * 2 * 8 * 2  # link pairs, then their table columns
+    return records
+
+
+def check_size_before_work(scenario: Any) -> float:
+    """Refuse, before the world is built or a robot placed, a run that cannot fit in memory.
+
+    The estimate is a lower bound: the team's positions while it is placed, and what the
+    recorder keeps with the fewest links a connected team can have (``n - 1``). A run that
+    passes is checked again with its real links once the team is placed
+    (:func:`check_run_size`). Returns the lower bound in bytes.
+    """
+    n, dim = scenario.team.n_robots, scenario.world.dim
+    steps = scenario.sim.max_steps + 1
+    recorded = scenario.sim.max_steps // scenario.output.record_every + 1
+    placement = n * dim * 8 * 8.0  # positions, candidates, a k-d tree of them
+    need = record_bytes(steps, recorded, n, dim, max(n - 1, 0)) + placement
+    budget = memory_budget_bytes()
+    if need > budget:
+        raise ScenarioError(
+            f"{scenario.source}: team.n_robots: {n:,} robots over {scenario.sim.max_steps:,} "
+            f"steps need at least {format_bytes(need)} (their positions and links at every "
+            f"recorded step), more than the {format_bytes(budget)} allowed here; use fewer "
+            "robots or steps, raise output.record_every, or set TETHER_MEMORY_LIMIT_GB"
+        )
+    return need
+
+
+def check_run_size(
+    scenario: Any,
+    initial: TeamState,
+    strategy: Strategy,
+    sensor: SensorModel,
+    pairs: np.ndarray | None,
+) -> float:
+    """Refuse a run whose records or per-step sensing would not fit in memory; the estimate.
+
+    The estimate counts what the recorder keeps (per-step records; positions
+    and links of every recorded step, links counted as in the initial team)
+    and, for strategies on the core sensing model with occlusion, the
+    per-step occlusion test (``sum of degree^2`` candidate triples).
+    """
+    n = initial.n + (0 if initial.fixed is None else len(initial.fixed))
+    steps = scenario.sim.max_steps + 1
+    recorded = scenario.sim.max_steps // scenario.output.record_every + 1
+    links = 0 if pairs is None else len(pairs)
+    records = record_bytes(steps, recorded, n, initial.dim, links)
+    occlusion = 0.0
+    core_sensing = type(strategy).sense is Strategy.sense
+    if core_sensing and links and sensor.occlusion and sensor.body_radius_m > 0:
+        degree = np.bincount(pairs.ravel(), minlength=initial.n).astype(float)
+        occlusion = float(degree @ degree) * 150  # the arrays of one step's occlusion test
+    need, budget = records + occlusion, memory_budget_bytes()
+    if need <= budget:
+        return need
+    what = f"{initial.n:,} robots with {links:,} links at the start"
+    if occlusion > records:
+        raise ScenarioError(
+            f"{scenario.source}: team.n_robots: {what}: testing which robot bodies hide which "
+            f"links needs about {format_bytes(occlusion)} at every step, more than the "
+            f"{format_bytes(budget)} allowed here; use fewer robots, a shorter sensing.range_m, "
+            "or sensing.occlusion: false"
+        )
+    raise ScenarioError(
+        f"{scenario.source}: team.n_robots: {what}: recording {scenario.sim.max_steps:,} steps "
+        f"needs about {format_bytes(need)}, more than the {format_bytes(budget)} allowed here; "
+        "use fewer robots or steps, or raise output.record_every"
+    )

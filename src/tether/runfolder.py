@@ -18,7 +18,6 @@ import platform
 import shutil
 import subprocess
 import tempfile
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -29,27 +28,19 @@ import scipy
 import yaml
 
 from tether import __version__
+from tether.atomic import UMASK
+from tether.atomic import atomic_write as atomic_write  # re-exported
+from tether.atomic import check_output_path as check_output_path  # re-exported
 from tether.errors import OutputError
-
-_UMASK = os.umask(0)
-os.umask(_UMASK)
 
 SUMMARY = "summary.json"
 SCENARIO = "scenario.yaml"
-
-
-def atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it onto ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are ordinary files
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+#: the file that marks a folder as a tether run folder; only tether writes it
+MARKER = ".tether-run.json"
+#: the marker formats this version of tether reads
+MARKER_FORMAT = 1
+_MARKER_KIND = "tether run folder"
+_MARKER_MAX_BYTES = 1 << 20
 
 
 def jsonable(value: Any) -> Any:
@@ -124,9 +115,99 @@ def save_figure(fig: Any, path: Path, dpi: int = 120) -> Path:
     return path
 
 
+def read_marker(path: Path) -> dict[str, Any] | None:
+    """The run-folder marker of ``path`` (:data:`MARKER`), or None if it has no valid one.
+
+    Only a regular file written by tether counts: a JSON object of this kind, of a
+    format this version reads, with the tether version and the list of entries tether
+    wrote into the folder.
+    """
+    file = path / MARKER
+    try:
+        if file.is_symlink() or not file.is_file() or file.stat().st_size > _MARKER_MAX_BYTES:
+            return None
+        data = json.loads(file.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if (
+        not isinstance(data, dict)
+        or data.get("kind") != _MARKER_KIND
+        or data.get("format") != MARKER_FORMAT
+        or not isinstance(data.get("tether_version"), str)
+        or not isinstance(data.get("files"), list)
+        or not all(isinstance(f, str) for f in data["files"])
+    ):
+        return None
+    return data
+
+
 def is_run_folder(path: Path) -> bool:
-    """A folder tether wrote for a run (finished or not)."""
-    return (path / SUMMARY).is_file() or (path / SCENARIO).is_file()
+    """A folder tether wrote for a run: it holds tether's marker (:func:`read_marker`)."""
+    return read_marker(path) is not None
+
+
+def _marker(files: list[str]) -> dict[str, Any]:
+    return {
+        "kind": _MARKER_KIND,
+        "format": MARKER_FORMAT,
+        "tether_version": __version__,
+        "files": sorted(set(files)),
+    }
+
+
+def _is_leftover(name: str) -> bool:
+    """A temporary file of an interrupted atomic write (:func:`atomic_write`)."""
+    return name.startswith(".") and name.endswith(".tmp")
+
+
+def foreign_entries(path: Path) -> list[str]:
+    """Entries of run folder ``path`` that tether did not write (its marker does not list)."""
+    marker = read_marker(path)
+    known = set(marker["files"]) if marker is not None else set()
+    names = sorted(entry.name for entry in os.scandir(path))
+    return [n for n in names if n != MARKER and n not in known and not _is_leftover(n)]
+
+
+def record_output(run_dir: Path, name: str) -> None:
+    """Add ``name`` (a file tether just wrote into ``run_dir``) to the run folder's marker.
+
+    ``tether view``, ``animate`` and ``export`` call this, so that a later ``--out`` onto
+    the folder knows those files are tether's too. Nothing happens outside a run folder.
+    """
+    marker = read_marker(run_dir)
+    if marker is not None and name not in marker["files"]:
+        write_json(run_dir / MARKER, _marker([*marker["files"], name]))
+
+
+def check_replaceable(path: Path) -> None:
+    """Refuse (:class:`OutputError`) a ``--out`` that a run folder commit may not replace.
+
+    Allowed: nothing there, an empty folder, or a tether run folder (:data:`MARKER`)
+    holding only what tether wrote. Everything else is refused and left untouched.
+    """
+    if path.is_symlink():
+        raise OutputError(
+            f"{path}: is a symbolic link; give the folder itself or a new --out (tether "
+            "replaces only its own run folders)"
+        )
+    if not path.exists():
+        return
+    if not path.is_dir():
+        raise OutputError(f"{path}: exists and is not a folder; choose another --out")
+    if not any(path.iterdir()):
+        return
+    if not is_run_folder(path):
+        raise OutputError(
+            f"{path}: folder is not empty and not a tether run folder (it has no {MARKER} "
+            "marker); choose a new or empty folder for --out (tether replaces only its own run "
+            "folders)"
+        )
+    foreign = foreign_entries(path)
+    if foreign:
+        raise OutputError(
+            f"{path}: holds {foreign[0]!r}{' and more' if len(foreign) > 1 else ''}, which "
+            "tether did not write; move it out of the run folder or choose another --out"
+        )
 
 
 def check_writable(folder: str | Path) -> None:
@@ -170,17 +251,13 @@ class RunFolder:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
+        # every operation works on the absolute path: ``--out .`` inside a run folder
+        # stages beside it, in the real parent, never inside the folder being replaced
+        self._target = Path(os.path.abspath(self.path))
         self._created: list[Path] = []  # parent folders made here, removed again on abort
         try:
-            exists = self.path.exists()
-            if exists and not self.path.is_dir():
-                raise OutputError(f"{self.path}: exists and is not a folder; choose another --out")
-            if exists and any(self.path.iterdir()) and not is_run_folder(self.path):
-                raise OutputError(
-                    f"{self.path}: folder is not empty and not a tether run folder; choose a "
-                    "new or empty folder for --out (tether replaces only its own run folders)"
-                )
-            parent = self.path.absolute().parent
+            check_replaceable(self._target)
+            parent = self._target.parent
             while not parent.exists() and parent != parent.parent:
                 self._created.append(parent)
                 parent = parent.parent
@@ -191,7 +268,7 @@ class RunFolder:
                 f"{self.path}: cannot create the run folder ({exc.strerror or exc}); "
                 "choose a writable --out"
             ) from None
-        os.chmod(self.staging, 0o777 & ~_UMASK)
+        os.chmod(self.staging, 0o777 & ~UMASK)
         self.written: list[str] = []
 
     def _make_staging(self, tries: int = 5) -> Path:
@@ -201,15 +278,16 @@ class RunFolder:
         same moment and remove the parent it made (:meth:`abort`) between our ``mkdir``
         and ``mkdtemp``: then the parent is made again.
         """
-        prefix = f".{self.path.name}.staging-"
+        prefix = f".{self._target.name}.staging-"
+        parent = self._target.parent
         for _ in range(tries - 1):
-            self.path.parent.mkdir(parents=True, exist_ok=True)
+            parent.mkdir(parents=True, exist_ok=True)
             try:
-                return Path(tempfile.mkdtemp(dir=self.path.parent, prefix=prefix))
+                return Path(tempfile.mkdtemp(dir=parent, prefix=prefix))
             except FileNotFoundError:
                 continue
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        return Path(tempfile.mkdtemp(dir=self.path.parent, prefix=prefix))
+        parent.mkdir(parents=True, exist_ok=True)
+        return Path(tempfile.mkdtemp(dir=parent, prefix=prefix))
 
     def _remove_created(self) -> None:
         for folder in self._created:  # deepest first
@@ -238,13 +316,21 @@ class RunFolder:
         return save_figure(fig, self.file(f"figures/{name}"), dpi)
 
     def commit(self, summary: dict[str, Any]) -> Path:
-        """Write ``summary.json`` last and move the staged folder onto :attr:`path`."""
+        """Write the marker, ``summary.json`` last, and move the staged folder onto :attr:`path`.
+
+        The folder at :attr:`path` is checked again first (a user may have put a file into
+        it while the run was simulating): anything tether did not write stops the commit.
+        """
+        tops = [name.split("/", 1)[0] for name in [*self.written, SUMMARY]]
+        write_json(self.staging / MARKER, _marker(tops))
         write_json(self.file(SUMMARY), summary)
+        target = self._target
+        check_replaceable(target)
         old = None
-        if self.path.exists():
-            old = Path(tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.old-"))
-            os.replace(self.path, old / "run")
-        os.replace(self.staging, self.path)
+        if target.exists():
+            old = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.old-"))
+            os.replace(target, old / "run")
+        os.replace(self.staging, target)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
         return self.path

@@ -33,9 +33,13 @@ from tether.config import (
 )
 from tether.errors import OutputError, ScenarioError, TetherError
 from tether.graph import is_connected
-from tether.limits import format_bytes, memory_budget_bytes
 from tether.plugins import load_builtins
-from tether.record import TrajectoryRecorder, summarize
+from tether.record import (
+    TrajectoryRecorder,
+    check_run_size,
+    check_size_before_work,
+    summarize,
+)
 from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
 from tether.scenario_world import STAND_IN_KEY, build_world, keep_scene_files, scene_files
@@ -60,6 +64,8 @@ class Built:
     initial: TeamState
     strategy: Strategy
     rng: np.random.Generator
+    #: the memory the run needs, estimated before it starts (bytes)
+    memory_bytes: float = 0.0
 
 
 @dataclass
@@ -233,6 +239,7 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
     params = strategy_params(scenario, cls)
     check_link_range(scenario, params)
     check_sweep(scenario, cls)
+    check_size_before_work(scenario)
     world = build_world(scenario, rng)
     sensor = make_sensor(scenario)
     initial = cls.initial_state(params, scenario, world, rng)
@@ -241,8 +248,8 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
         positions, pairs = _place_team(scenario, world, sensor, rng)
         initial = TeamState.at_rest(positions)
     strategy = cls.from_scenario(params, scenario, world, initial, rng)
-    check_run_size(scenario, initial, strategy, sensor, pairs)
-    return Built(scenario, world, sensor, initial, strategy, rng)
+    need = check_run_size(scenario, initial, strategy, sensor, pairs)
+    return Built(scenario, world, sensor, initial, strategy, rng, need)
 
 
 def check_link_range(scenario: Scenario, params: Any) -> None:
@@ -262,50 +269,6 @@ def check_link_range(scenario: Scenario, params: Any) -> None:
             f"strategy's link range Rs = {rs:g} m{where}: it would keep links the robots "
             f"cannot sense; set sensing.range_m: {rs:g} or lower strategy.params.rs_m"
         )
-
-
-def check_run_size(
-    scenario: Scenario,
-    initial: TeamState,
-    strategy: Strategy,
-    sensor: SensorModel,
-    pairs: np.ndarray | None,
-) -> None:
-    """Refuse a run whose records or per-step sensing would not fit in memory.
-
-    The estimate counts what the recorder keeps (per-step records; positions
-    and links of every recorded step, links counted as in the initial team)
-    and, for strategies on the core sensing model with occlusion, the
-    per-step occlusion test (``sum of degree^2`` candidate triples).
-    """
-    n = initial.n + (0 if initial.fixed is None else len(initial.fixed))
-    steps = scenario.sim.max_steps + 1
-    recorded = scenario.sim.max_steps // scenario.output.record_every + 1
-    links = 0 if pairs is None else len(pairs)
-    records = steps * 400  # a StepRecord and its values per step
-    records += recorded * n * (initial.dim + 2) * 8 * 2  # positions, then their table columns
-    records += recorded * links * 2 * 8 * 2  # link pairs, then their table columns
-    occlusion = 0.0
-    core_sensing = type(strategy).sense is Strategy.sense
-    if core_sensing and links and sensor.occlusion and sensor.body_radius_m > 0:
-        degree = np.bincount(pairs.ravel(), minlength=initial.n).astype(float)
-        occlusion = float(degree @ degree) * 150  # the arrays of one step's occlusion test
-    need, budget = records + occlusion, memory_budget_bytes()
-    if need <= budget:
-        return
-    what = f"{initial.n:,} robots with {links:,} links at the start"
-    if occlusion > records:
-        raise ScenarioError(
-            f"{scenario.source}: team.n_robots: {what}: testing which robot bodies hide which "
-            f"links needs about {format_bytes(occlusion)} at every step, more than the "
-            f"{format_bytes(budget)} allowed here; use fewer robots, a shorter sensing.range_m, "
-            "or sensing.occlusion: false"
-        )
-    raise ScenarioError(
-        f"{scenario.source}: team.n_robots: {what}: recording {scenario.sim.max_steps:,} steps "
-        f"needs about {format_bytes(need)}, more than the {format_bytes(budget)} allowed here; "
-        "use fewer robots or steps, or raise output.record_every"
-    )
 
 
 def place_team(
@@ -359,13 +322,16 @@ def run(
     seed: int | None = None,
     figures: bool | None = None,
     progress: Callable[[int], None] | None = None,
+    check: Callable[[], None] | None = None,
 ) -> RunOutcome:
     """Run one scenario and write its run folder; returns the folder and the summary.
 
     The folder is committed as a whole (:class:`tether.runfolder.RunFolder`):
     ``summary.json`` is written last, and the folder appears at ``out_dir``
     only when the run and its figures are complete. ``progress`` is called with
-    each step number as the run goes (``tether run``'s progress bar).
+    each step number as the run goes (``tether run``'s progress bar). ``check`` is called
+    after the scenario is built and before anything is written (the command line checks
+    there what ``tether validate`` checks beyond :func:`build`, in the same order).
     """
     scenario = as_scenario(scenario)
     seed = check_seed(seed)
@@ -379,6 +345,8 @@ def run(
         scenario._source, scenario._base_dir = source, base_dir
     seed = scenario.seed
     built = build(scenario, seed)
+    if check is not None:
+        check()
     path = Path(out_dir) if out_dir is not None else default_run_dir(scenario, seed)
     folder = RunFolder(path)
     try:

@@ -29,12 +29,13 @@ from typing import Any
 import numpy as np
 import yaml
 
-from tether.config import Scenario, YamlLoader
-from tether.errors import MapError, ScenarioError, TetherWarning
+from tether.config import Scenario
+from tether.errors import MapError, ScenarioError, TetherError, TetherWarning
 from tether.registry import SCENES
 from tether.suggest import did_you_mean
 from tether.world.scenes import make_scene
 from tether.world.world import World
+from tether.yamlfile import read_yaml
 
 __all__ = [
     "FILE_KEYS",
@@ -116,9 +117,10 @@ def scene_files(scenario: Scenario) -> tuple[dict[str, Any], list[SceneFile]]:
         given = _path_value(scenario, key, params[key])
         resolved = scenario.resolve_path(given)
         found = SceneFile(key, given, resolved)
-        if not resolved.exists() and key == "path" and stand_in is not None:
+        exists = _usable(scenario, key, given, resolved)
+        if not exists and key == "path" and stand_in is not None:
             other = scenario.resolve_path(stand_in)
-            if not other.exists():
+            if not _usable(scenario, STAND_IN_KEY, stand_in, other):
                 raise ScenarioError(
                     f"{src}: world.params.{STAND_IN_KEY}: {stand_in}: file not found beside "
                     f"the scenario ({scenario.base_dir}), and neither is world.params.path "
@@ -135,15 +137,31 @@ def scene_files(scenario: Scenario) -> tuple[dict[str, Any], list[SceneFile]]:
                     stacklevel=3,
                 )
             found = SceneFile(key, stand_in, other, stand_in_for=given)
-        elif not resolved.exists():
+        elif not exists:
             raise ScenarioError(
-                f"{src}: world.params.{key}: {given}: file not found beside the scenario "
+                f"{src}: world.params.{key}: {_shown(given)}: file not found beside the scenario "
                 f"({scenario.base_dir}) or from the current directory; give a path "
                 "relative to one of them or an absolute one"
             )
         params[key] = str(found.path)
         files.append(found)
     return params, files
+
+
+def _shown(path: str, limit: int = 80) -> str:
+    return path if len(path) <= limit else path[: limit - 3] + "..."
+
+
+def _usable(scenario: Scenario, key: str, given: str, resolved: Path) -> bool:
+    """Whether the file exists; a path the file system cannot take is one clear error."""
+    try:
+        return resolved.exists()
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte
+        reason = getattr(exc, "strerror", None) or "not a usable path"
+        raise ScenarioError(
+            f"{scenario.source}: world.params.{key}: {_shown(given)} is not a usable file path "
+            f"({reason}); give a shorter path to the map or point file"
+        ) from None
 
 
 def _field_of(message: str, names: list[str], files: list[SceneFile]) -> str:
@@ -216,8 +234,8 @@ def _map_image(path: Path) -> tuple[str, Path] | None:
     if path.suffix.lower() not in (".yaml", ".yml"):
         return None
     try:
-        data = yaml.load(path.read_text(encoding="utf-8"), Loader=YamlLoader)  # noqa: S506
-    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        data = read_yaml(path, str(path))
+    except (OSError, TetherError):
         return None
     image = data.get("image") if isinstance(data, dict) else None
     if not isinstance(image, str) or not image:
@@ -278,8 +296,7 @@ def keep_scene_files(
                 image_name = _free_name(image[1].name, taken)
                 shutil.copyfile(image[1], target.parent / image_name)
                 if image_name != image[0]:  # the copy names the image beside it
-                    text = item.path.read_text(encoding="utf-8")
-                    map_data = yaml.load(text, Loader=YamlLoader)  # noqa: S506
+                    map_data = read_yaml(item.path, str(item.path))
                     map_data["image"] = image_name
                     target.write_text(yaml.safe_dump(map_data, sort_keys=False))
             record["copy"] = f"{FILES_DIR}/{name}"

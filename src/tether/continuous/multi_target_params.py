@@ -112,7 +112,7 @@ class MultiTargetParams(ContinuousParams):
     def _apply_travel_preset(cls, data: Any) -> Any:
         if isinstance(data, dict):
             preset = data.get("preset", "outdoor")
-            if preset in TRAVEL_TABLE2:
+            if isinstance(preset, str) and preset in TRAVEL_TABLE2:
                 data = {**TRAVEL_TABLE2[preset], **PRESET_DEFAULTS.get(preset, {}), **data}
         return data
 

@@ -50,8 +50,12 @@ def safe_team(
     )
     if center_m is not None:
         _check_center(world, np.asarray(center_m, dtype=float), params, obstacles)
-    most = 0  # the most robots placed in one try (for the message)
+    if world.bounds_m is not None:
+        _check_room(n, dim, lo + box_margin_m, hi - box_margin_m, params.rc_outer_m)
+    jammed, most = 0, 0  # most: the most robots placed in one try (for the message)
     for _ in range(max_tries):
+        if jammed >= _MAX_JAMMED:
+            break  # the box is full at this spacing: more tries would jam too
         if center_m is not None:
             start = np.asarray(center_m, dtype=float).copy()
         else:
@@ -59,15 +63,16 @@ def safe_team(
             start = rng.uniform(lo + inset, hi - inset)
         if center_m is None and dim == 3 and height_m is not None:
             start[2] = rng.uniform(*height_m)
-        pts = [start]
+        pts = np.empty((n, dim))  # the robots placed so far: pts[:count]
+        pts[0], count = start, 1
         for _ in range(200 * n):
-            if len(pts) == n:
+            if count == n:
                 break
-            anchor = pts[rng.integers(len(pts))]
+            anchor = pts[rng.integers(count)]
             direction = rng.normal(size=dim)
             direction /= np.linalg.norm(direction)
             cand = anchor + direction * rng.uniform(params.rc_outer_m, params.rs_inner_m)
-            if np.min(np.linalg.norm(np.asarray(pts) - cand, axis=1)) <= params.rc_outer_m:
+            if np.min(np.linalg.norm(pts[:count] - cand, axis=1)) <= params.rc_outer_m:
                 continue
             if not world.in_bounds(cand[None])[0]:
                 continue
@@ -81,16 +86,26 @@ def safe_team(
                 continue
             if not world.points_free(cand[None])[0]:  # inside a thick obstacle, far from its faces
                 continue
-            pts.append(cand)
-        most = max(most, len(pts))
-        if len(pts) < n or not world.points_free(pts[0][None])[0]:
+            pts[count] = cand
+            count += 1
+        most = max(most, count)
+        if count < n:
+            if center_m is not None:  # from the same start, the space filled up again
+                jammed += 1
             continue
-        q = np.asarray(pts)
+        if not world.points_free(pts[0][None])[0]:
+            continue
+        q = pts
         if obstacles.tree is not None and obstacles.tree.query(q[0])[0] <= params.ro_outer_m:
             continue
         lam, _ = compute_weights(q, params, obstacles).fiedler()
         if lam > params.lambda2_min:
             return q
+    if jammed >= _MAX_JAMMED:
+        raise ValueError(
+            f"could not place {n} robots at least R'c = {params.rc_outer_m:g} m apart: the "
+            f"world filled up after {most}; use fewer robots"
+        )
     where = "around center_m" if center_m is not None else "at random starts"
     raise ValueError(
         f"could not place {n} robots with a connected weighted graph {where} in {max_tries} "
@@ -122,3 +137,27 @@ def _check_center(
                 f"center_m: {center.tolist()} is {gap:.2f} m from an obstacle, within R'o = "
                 f"{params.ro_outer_m:g} m; move the start farther from walls"
             )
+
+
+#: tries from a fixed start that could not place the whole team (the space around it is
+#: full at this spacing) before the placement gives up; a try from a random start, or
+#: whose weighted graph is not connected, does not count
+_MAX_JAMMED = 2
+#: the densest packing of equal balls (Kepler) and of equal discs
+_PACKING = {2: np.pi / (2 * np.sqrt(3)), 3: np.pi / (3 * np.sqrt(2))}
+
+
+def _check_room(n: int, dim: int, lo: np.ndarray, hi: np.ndarray, separation_m: float) -> None:
+    """Refuse a team that cannot fit in the box ``[lo, hi]`` with robots ``separation_m``
+    apart, even packed densest (balls of radius ``separation_m / 2``)."""
+    if dim not in _PACKING or n < 2:
+        return
+    r = 0.5 * separation_m
+    room = float(np.prod(np.maximum(hi - lo, 0.0) + 2 * r))
+    ball = np.pi * r**2 if dim == 2 else 4.0 / 3.0 * np.pi * r**3
+    most = int(_PACKING[dim] * room / ball)
+    if n > most:
+        raise ValueError(
+            f"{n} robots do not fit in the world at least R'c = {separation_m:g} m apart "
+            f"(at most about {most} would, packed densest); use fewer robots"
+        )

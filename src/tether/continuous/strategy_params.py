@@ -96,7 +96,7 @@ class ContinuousParams(_Strict):
                     "safe set, the default), enforce (veto them) or off"
                 )
             preset = data.get("preset", "outdoor")
-            if preset in TABLE2:
+            if isinstance(preset, str) and preset in TABLE2:
                 data = {**TABLE2[preset], **data}
         return data
 

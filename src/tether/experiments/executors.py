@@ -15,18 +15,16 @@ client: ``address`` of a running scheduler, e.g. ``tcp://10.0.0.5:8786`` started
 from __future__ import annotations
 
 import os
-import signal
-import sys
 import traceback
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from tether.errors import TetherError
 from tether.interrupts import Stopped, raise_on_sigterm
+from tether.lifetime import die_with_parent
 from tether.registry import Registry
 
 __all__ = ["EXECUTORS", "Trial", "TrialOutcome", "check_executor", "execute", "run_trial"]
@@ -111,15 +109,12 @@ def _serial(trials: list[Trial], workers: int, address: str | None) -> Iterator[
 STOP_GRACE_S = 10.0
 
 
-def _worker_start() -> None:
-    """A worker stops cleanly on SIGTERM, leaves Ctrl-C to its parent, dies with it (Linux)."""
+def _worker_start(parent_pid: int) -> None:
+    """A worker stops cleanly on SIGTERM, leaves Ctrl-C to its parent, and dies with it
+    however it dies (``kill -9`` included): no trial keeps running, and no worker waits
+    forever, behind a sweep that is gone."""
     raise_on_sigterm()
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        # PR_SET_PDEATHSIG: SIGTERM when the parent is gone, even killed with SIGKILL
-        with suppress(OSError, AttributeError):
-            ctypes.CDLL(None).prctl(1, int(signal.SIGTERM))
+    die_with_parent(parent_pid)
 
 
 def _trial_in_worker(trial: Trial) -> TrialOutcome:
@@ -144,7 +139,9 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 @EXECUTORS.register("processes")
 def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
-    pool = ProcessPoolExecutor(max_workers=max(1, workers), initializer=_worker_start)
+    pool = ProcessPoolExecutor(
+        max_workers=max(1, workers), initializer=_worker_start, initargs=(os.getpid(),)
+    )
     try:
         submitted = {pool.submit(_trial_in_worker, t): t for t in trials}
         pending = set(submitted)

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from tether import __version__
+from tether.errors import OutputError
 from tether.experiments.bands import bands_against_axis, bands_over_time
 from tether.experiments.results import SweepResults, load_results, step_columns, step_series
 from tether.experiments.stats import compare_groups, describe
@@ -215,6 +216,16 @@ def write_report(sweep_dir: str | Path, command: str | None = None) -> Path:
         The command named in the report as its origin (default ``tether report DIR``).
     """
     results = load_results(sweep_dir)
+    try:
+        return _write_report(results, command)
+    except OSError as exc:  # a full disk, a read-only folder: every file is whole or absent
+        raise OutputError(
+            f"{results.folder}: cannot write the report ({exc.strerror or exc}); free some "
+            "space or make the sweep folder writable"
+        ) from None
+
+
+def _write_report(results: Any, command: str | None) -> Path:
     folder = results.folder
     figures = folder / "figures"
     lines = _header(results, command or f"tether report {folder}")

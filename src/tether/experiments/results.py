@@ -12,12 +12,12 @@ from typing import Any
 
 import numpy as np
 import pyarrow.parquet as pq
-import yaml
 
 from tether.config import sweep_label
 from tether.errors import TetherError
 from tether.experiments.store import STORE_FILE, SWEEP_SCENARIO, SWEEP_TABLE
 from tether.sweepspec import SweepError, parse_sweep
+from tether.yamlfile import read_yaml
 
 __all__ = ["SweepResults", "load_results", "step_series"]
 
@@ -158,9 +158,9 @@ def load_results(folder: str | Path) -> SweepResults:
         ) from None
     scenario: dict[str, Any] = {}
     try:
-        loaded = yaml.safe_load((path / SWEEP_SCENARIO).read_text())
+        loaded = read_yaml(path / SWEEP_SCENARIO, str(path / SWEEP_SCENARIO))
         scenario = loaded if isinstance(loaded, dict) else {}
-    except (OSError, yaml.YAMLError):
+    except (OSError, TetherError):
         pass
     try:
         store_hash = json.loads((path / STORE_FILE).read_text()).get("scenario_hash")

@@ -18,20 +18,23 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from tether import __version__
 from tether.config import Scenario
-from tether.errors import OutputError
-from tether.runfolder import is_run_folder, write_json, write_yaml
+from tether.errors import OutputError, TetherError
+from tether.experiments.lock import LOCK_FILE, clean_leftovers, sweep_lock
+from tether.runfolder import write_json, write_yaml
+from tether.yamlfile import read_yaml
 
 __all__ = [
     "STORE_FILE",
     "SWEEP_SCENARIO",
     "SWEEP_TABLE",
+    "locked_store",
     "open_store",
     "scenario_hash",
 ]
@@ -86,9 +89,9 @@ def _recorded(out: Path) -> tuple[str | None, dict[str, Any] | None]:
     """The hash and scenario a sweep folder records (None when it records none)."""
     old: dict[str, Any] | None = None
     try:
-        loaded = yaml.safe_load((out / SWEEP_SCENARIO).read_text())
+        loaded = read_yaml(out / SWEEP_SCENARIO, str(out / SWEEP_SCENARIO))
         old = loaded if isinstance(loaded, dict) else None
-    except (OSError, yaml.YAMLError):
+    except (OSError, TetherError):
         pass
     try:
         recorded = json.loads((out / STORE_FILE).read_text()).get("scenario_hash")
@@ -100,13 +103,64 @@ def _recorded(out: Path) -> tuple[str | None, dict[str, Any] | None]:
 
 
 def is_sweep_folder(out: Path) -> bool:
-    """A folder a sweep wrote (its scenario, table, store file or a trial's run folder)."""
-    if any((out / name).is_file() for name in (SWEEP_SCENARIO, SWEEP_TABLE, STORE_FILE)):
-        return True
-    return any(
-        is_run_folder(run) for combo in out.iterdir() if combo.is_dir()
-        for run in combo.glob("seed-*")
-    )  # fmt: skip
+    """A folder a sweep wrote: it holds tether's ``store.json`` (never judged by common names).
+
+    Only a regular file that is a JSON object of a store format this version reads, with
+    the scenario hash and the tether version, counts.
+    """
+    file = out / STORE_FILE
+    try:
+        if file.is_symlink() or not file.is_file() or file.stat().st_size > 1 << 20:
+            return False
+        data = json.loads(file.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return (
+        isinstance(data, dict)
+        and data.get("format") == STORE_FORMAT
+        and isinstance(data.get("scenario_hash"), str)
+        and isinstance(data.get("tether_version"), str)
+    )
+
+
+def _check_folder(out: Path) -> bool:
+    """Refuse a file or a foreign non-empty folder at ``out``; True if it is a sweep folder.
+
+    A folder holding nothing but the sweep lock file counts as empty.
+    """
+    if out.is_symlink() or (out.exists() and not out.is_dir()):
+        raise OutputError(f"{out}: exists and is not a folder; choose another --out")
+    if not out.is_dir() or not any(p.name != LOCK_FILE for p in out.iterdir()):
+        return False
+    if not is_sweep_folder(out):
+        raise OutputError(
+            f"{out}: folder is not empty and not a tether sweep folder (it has no tether "
+            f"{STORE_FILE}); choose a new or empty folder for --out (a sweep resumes only in "
+            "its own folder)"
+        )
+    return True
+
+
+@contextmanager
+def locked_store(scenario: Scenario, out_dir: str | Path) -> Iterator[Path]:
+    """:func:`open_store` under the folder's sweep lock, held for the ``with`` block.
+
+    The folder is checked before anything is created in it; under the lock, what killed
+    sweeps left (staging folders, temporary files) is removed first
+    (:mod:`tether.experiments.lock`). A second sweep into the folder is refused in one line.
+    """
+    out = Path(out_dir)
+    try:
+        _check_folder(out)
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(
+            f"{out}: cannot write the sweep folder ({exc.strerror or exc}); choose a writable --out"
+        ) from None
+    with sweep_lock(out):
+        with suppress(OSError):  # what cannot be removed stays: it is hidden and never read
+            clean_leftovers(out)
+        yield open_store(scenario, out)
 
 
 def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
@@ -124,14 +178,7 @@ def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
     data = scenario.model_dump(mode="json")
     new_hash = scenario_hash(data)
     try:
-        if out.exists() and not out.is_dir():
-            raise OutputError(f"{out}: exists and is not a folder; choose another --out")
-        if out.is_dir() and any(out.iterdir()):
-            if not is_sweep_folder(out):
-                raise OutputError(
-                    f"{out}: folder is not empty and not a tether sweep folder; choose a new or "
-                    "empty folder for --out (a sweep resumes only in its own folder)"
-                )
+        if _check_folder(out):
             old_hash, old = _recorded(out)
             if old_hash is not None and old_hash != new_hash:
                 change = first_difference(old, data) if old is not None else "a change"
@@ -141,7 +188,6 @@ def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
                     "new --out, or undo the change to resume"
                 )
         out.mkdir(parents=True, exist_ok=True)
-        write_yaml(out / SWEEP_SCENARIO, data)
         write_json(
             out / STORE_FILE,
             {
@@ -151,6 +197,7 @@ def open_store(scenario: Scenario, out_dir: str | Path) -> Path:
                 "tether_version": __version__,
             },
         )
+        write_yaml(out / SWEEP_SCENARIO, data)
     except OSError as exc:
         raise OutputError(
             f"{out}: cannot write the sweep folder ({exc.strerror or exc}); choose a writable --out"

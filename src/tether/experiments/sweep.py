@@ -24,7 +24,7 @@ from tether.errors import OutputError, TetherError
 from tether.experiments.executors import Trial, TrialOutcome, check_executor, execute
 from tether.experiments.plan import check_combinations, trial_id, trial_scenario, trials_of
 from tether.experiments.progress import LineProgress, TrialProgress
-from tether.experiments.store import SWEEP_SCENARIO, SWEEP_TABLE, open_store
+from tether.experiments.store import SWEEP_SCENARIO, SWEEP_TABLE, locked_store, open_store
 from tether.runfolder import save_figure, write_rows
 from tether.viz.plots import TIME_LABEL, links_over_time, series_over_time
 
@@ -182,20 +182,22 @@ def run_sweep(
     check_executor(executor, workers, address)
     trials = trials_of(scenario, out_dir, seeds)
     check_combinations(scenario, seeds)
-    out = open_store(scenario, out_dir)
-    done = run_trials(
-        [t for _, t in trials], executor=executor, workers=workers, address=address,
-        progress=progress,
-    )  # fmt: skip
-    rows = trial_rows(out, trials, done)
-    finished = [r for r in rows if r["status"] == "done"]
-    try:
-        table = write_rows(out / SWEEP_TABLE, rows)
-        followers = sweep_spec(scenario).followers()
-        drawn = sweep_figures(finished, scenario.team.n_robots, scenario.name, followers)
-        figures = [save_figure(fig, out / "figures" / name) for fig, name in drawn]
-    except OSError as exc:
-        raise OutputError(f"{out}: cannot write the sweep table ({exc.strerror or exc})") from None
+    with locked_store(scenario, out_dir) as out:  # one sweep per folder at a time
+        done = run_trials(
+            [t for _, t in trials], executor=executor, workers=workers, address=address,
+            progress=progress,
+        )  # fmt: skip
+        rows = trial_rows(out, trials, done)
+        finished = [r for r in rows if r["status"] == "done"]
+        try:
+            table = write_rows(out / SWEEP_TABLE, rows)
+            followers = sweep_spec(scenario).followers()
+            drawn = sweep_figures(finished, scenario.team.n_robots, scenario.name, followers)
+            figures = [save_figure(fig, out / "figures" / name) for fig, name in drawn]
+        except OSError as exc:
+            raise OutputError(
+                f"{out}: cannot write the sweep table ({exc.strerror or exc})"
+            ) from None
     errors = done.errors
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""

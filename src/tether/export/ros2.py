@@ -35,8 +35,10 @@ from typing import Any
 
 import numpy as np
 
+from tether.atomic import safe_file_name
 from tether.errors import TetherError
 from tether.export.cdr import point_marker_array
+from tether.viewing.output import check_target, write_output, write_output_folder
 from tether.viewing.runfolder import RunData, load_run
 from tether.viz import style
 
@@ -432,17 +434,27 @@ def export(
     if not isinstance(run, RunData):
         run = load_run(run)
     msgs = Messages(run)
-    if out is None:
-        out = run.path / (f"{run.name}.mcap" if fmt == "mcap" else "rosbag2")
+    if out is None:  # named from data: made a safe file name, always inside the run folder
+        out = run.path / (f"{safe_file_name(run.name)}.mcap" if fmt == "mcap" else "rosbag2")
     path = Path(out)
-    if fmt == "rosbag2" and path.exists():
+    if fmt == "rosbag2" and (path.exists() or path.is_symlink()):
         raise TetherError(f"{path}: already exists; rosbag2 writes a new folder (remove it first)")
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if fmt == "mcap":
+        check_target(path)
     stream = _stream(run, msgs)
     if progress is not None:
         stream = _counted(stream, progress)
-    counts = (_write_mcap if fmt == "mcap" else _write_rosbag2)(path, stream, msgs.ts)
-    size = sum(f.stat().st_size for f in path.rglob("*")) if path.is_dir() else path.stat().st_size
+    counts: dict[str, int] = {}
+    if fmt == "mcap":
+        size = write_output(
+            path, lambda tmp: counts.update(_write_mcap(Path(tmp), stream, msgs.ts)),
+            what="MCAP file", run_dir=run.path,
+        )  # fmt: skip
+    else:
+        size = write_output_folder(
+            path, lambda tmp: counts.update(_write_rosbag2(tmp, stream, msgs.ts)),
+            what="rosbag2", run_dir=run.path,
+        )  # fmt: skip
     return Export(path, fmt, counts, size, time.perf_counter() - start)
 
 

@@ -8,11 +8,10 @@ break the group. Source: Kerestecioglu & Cezayirli, sections III-B and IV.
 
 from __future__ import annotations
 
-import importlib
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from tether import floats
 from tether.config import MAX_LENGTH_M, Coordinate, Scenario, finite_strict
@@ -22,6 +21,7 @@ from tether.registry import STRATEGIES
 from tether.silent import steering
 from tether.silent.steering import team_steps
 from tether.sim import StepContext, Strategy, TeamState
+from tether.usercode import CODE_FIELD, UserCodeError, resolve_callable
 from tether.viz.plots import team_snapshot
 from tether.world.world import World
 
@@ -34,7 +34,10 @@ class TrajectoryParams(BaseModel):
     waypoints: list[list[Coordinate]] | None = None
     speed_mps: float = Field(default=1.0, gt=0, le=MAX_LENGTH_M)
     function: str | None = Field(
-        default=None, description="'package.module:callable' mapping t_s -> position"
+        default=None,
+        description="'module:callable' mapping t_s -> position, in a module the user has "
+        "loaded (never imported from the scenario: tether.usercode)",
+        json_schema_extra=CODE_FIELD,
     )
     goal_tolerance_m: float = Field(default=0.5, gt=0, le=MAX_LENGTH_M)
 
@@ -43,8 +46,22 @@ class TrajectoryParams(BaseModel):
         if self.kind == "waypoints" and (not self.waypoints or len(self.waypoints) < 2):
             raise ValueError("kind 'waypoints' needs a 'waypoints' list of at least 2 points")
         if self.kind == "function" and not self.function:
-            raise ValueError("kind 'function' needs 'function: package.module:callable'")
+            raise ValueError("kind 'function' needs 'function: module:callable'")
+        if self.kind == "waypoints" and self.function is not None:
+            raise ValueError("'function' is used only with kind 'function'; remove it")
         return self
+
+    @field_validator("waypoints")
+    @classmethod
+    def _same_dimension(cls, value: list[list[float]] | None) -> list[list[float]] | None:
+        sizes = [len(p) for p in value or []]
+        if len(set(sizes)) > 1:
+            k = next(i for i, n in enumerate(sizes) if n != sizes[0])
+            raise ValueError(
+                f"waypoint {k} has {sizes[k]} coordinates and waypoint 0 has {sizes[0]}; give "
+                "every waypoint the world's dimension"
+            )
+        return value
 
 
 class SilentParams(BaseModel):
@@ -73,15 +90,6 @@ class SilentParams(BaseModel):
         description="evaluate (1)-(2) for the worst true position within the sensor's error "
         "bounds (false: trust measurements as the paper's noise-free theorem does)",
     )
-
-
-def _load_function(spec: str) -> TimeFunction:
-    module_name, _, attr = spec.partition(":")
-    module = importlib.import_module(module_name)
-    fn = getattr(module, attr)
-    if not callable(fn):
-        raise TypeError(f"{spec} is not callable")
-    return fn
 
 
 def _number(name: str, value: Any, *, lo: float = 0.0, strict: bool = True) -> None:
@@ -201,12 +209,9 @@ class SilentStrategy(Strategy):
             check_path_clear(path, world, src, field)
         else:
             try:
-                path = _load_function(traj.function or "")
-            except (ImportError, AttributeError, TypeError, ValueError) as exc:
-                raise ScenarioError(
-                    f"{src}: {field}.function: cannot load {traj.function!r} ({exc}); "
-                    "expected 'package.module:callable'"
-                ) from None
+                path = resolve_callable(traj.function)
+            except UserCodeError as exc:
+                raise ScenarioError(f"{src}: {field}.function: {exc}") from None
             _check_time_function(path, world.dim, src, f"{field}.function")
         n = initial.n
         if params.leader is not None and not -n <= params.leader < n:

@@ -29,6 +29,7 @@ from tether.errors import TetherError  # noqa: E402
 from tether.progress import progress_bar  # noqa: E402
 from tether.targets_recorded import FINISHED, HIDDEN  # noqa: E402
 from tether.viewing.known import first_seen  # noqa: E402
+from tether.viewing.output import check_target, write_output  # noqa: E402
 from tether.viewing.runfolder import RunData, frame_indices, load_run  # noqa: E402
 from tether.viz import style  # noqa: E402
 
@@ -310,6 +311,7 @@ def _write_gif(frames: Iterator[np.ndarray], out: Path, fps: float) -> tuple[int
         raise TetherError("nothing to animate: the run has no recorded positions")
     images[0].save(
         out,
+        format="GIF",
         save_all=True,
         append_images=images[1:],
         duration=int(round(1000 / fps)),
@@ -353,6 +355,8 @@ def _write_mp4(frames: Iterator[np.ndarray], out: Path, fps: float) -> tuple[int
                     "libx264",
                     "-movflags",
                     "+faststart",
+                    "-f",
+                    "mp4",
                     str(out),
                 ]
                 proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
@@ -399,7 +403,7 @@ def animate(
     if fmt not in ("gif", "mp4"):
         raise TetherError(f"--format: expected gif or mp4 (got {fmt!r})")
     out_path = Path(out) if out is not None else run.path / f"animation.{fmt}"
-    out_path.parent.mkdir(parents=True, exist_ok=True)
+    check_target(out_path)  # before any frame is drawn
     max_frames = int(max(1, round(fps * (duration_s or DEFAULT_DURATION_S))))
     shown = frame_indices(run.n_frames, stride=stride, max_frames=None if stride else max_frames)
     dpi = 90
@@ -407,9 +411,10 @@ def animate(
     try:
         frames = _frames(painter, shown, progress)
         writer = _write_gif if fmt == "gif" else _write_mp4
-        count, size = writer(frames, out_path, fps)
+        written: list[tuple[int, tuple[int, int]]] = []
+        n_bytes = write_output(out_path, lambda tmp: written.append(writer(frames, Path(tmp), fps)),
+                               what="animation", run_dir=run.path)  # fmt: skip
     finally:
         painter.close()
-    return Animation(
-        out_path, fmt, count, size, out_path.stat().st_size, time.perf_counter() - start
-    )
+    count, size = written[0]
+    return Animation(out_path, fmt, count, size, n_bytes, time.perf_counter() - start)

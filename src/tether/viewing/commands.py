@@ -55,23 +55,29 @@ def view_command(
     say: Any,
 ) -> Path:
     from tether.errors import TetherError
+    from tether.viewing.replay import bind_server, write_replay
     from tether.viewing.replay import serve as serve_file
-    from tether.viewing.replay import write_replay
 
     if max_mb <= 0:
         raise TetherError(f"--max-mb: must be positive (got {max_mb})")
     start = time.perf_counter()
-    run = load_run(run_dir)
-    for note in run.notes:
-        say(f"note: {note}")
-    result = write_replay(run, out, budget_bytes=int(max_mb * 1e6))
+    server = bind_server(port) if serve else None  # a port in use is refused before any work
+    try:
+        run = load_run(run_dir)
+        for note in run.notes:
+            say(f"note: {note}")
+        result = write_replay(run, out, budget_bytes=int(max_mb * 1e6))
+    except BaseException:
+        if server is not None:
+            server.server_close()
+        raise
     thinned = f", 1 in {result.stride} recorded steps" if result.stride > 1 else ""
     say(
         f"replay: {result.path} ({_mb(result.bytes)}, {result.n_frames} frames{thinned}, "
         f"{time.perf_counter() - start:.1f} s)"
     )
-    if serve:
-        serve_file(result.path, port, announce=say)
+    if server is not None:
+        serve_file(result.path, port, announce=say, server=server)
     return result.path
 
 

@@ -26,6 +26,7 @@ from typing import Any
 
 from tether.errors import TetherError
 from tether.interrupts import Stopped
+from tether.viewing.output import check_target, write_output
 from tether.viewing.payload import build_payload
 from tether.viewing.runfolder import RunData, load_run
 
@@ -69,21 +70,40 @@ def three_script() -> str:
     )
 
 
-def _script_safe(text: str) -> str:
-    """Text that cannot close the ``<script>`` element it is placed in."""
+def _script_safe(text: str, name: str) -> str:
+    """Code that cannot leave the ``<script>`` element it is placed in.
+
+    ``</`` becomes ``<\\/`` (the same in JavaScript); code holding ``<!--`` or ``<script``,
+    which switch the HTML parser's script states, is refused (tether's own scripts never do).
+    """
+    if re.search(r"<!--|<script", text, re.IGNORECASE):
+        raise TetherError(f"{name}: holds '<!--' or '<script', which would break the page")
     return text.replace("</", "<\\/")
+
+
+def script_json(value: Any) -> str:
+    """JSON for a ``<script type="application/json">`` element: no ``<``, ``>`` or ``&``.
+
+    Data (a scenario's name, its notes) may hold ``</script>``, ``<!--`` or ``<script``;
+    written as ``\\u003c`` and so on, they are the same JSON and cannot end the element or
+    switch the HTML parser into a state that swallows the rest of the page.
+    """
+    text = json.dumps(value, separators=(",", ":"))  # ASCII: U+2028 and U+2029 escaped too
+    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
 
 
 def render_html(meta: dict[str, Any], blob_b64: str) -> str:
     """The page: template + renderer + replay scripts + data."""
     page = _resource("web", "replay.html")
+    if not re.fullmatch(r"[A-Za-z0-9+/=\s]*", blob_b64):
+        raise TetherError("replay data: not base64")
     parts = {
         "__TITLE__": html.escape(str(meta.get("name", "run"))),
-        "__META__": _script_safe(json.dumps(meta, separators=(",", ":"))),
+        "__META__": script_json(meta),
         "__DATA__": blob_b64,
-        "__THREE__": _script_safe(three_script()),
-        "__SCENE__": _script_safe(_resource("web", "replay_scene.js")),
-        "__APP__": _script_safe(_resource("web", "replay_app.js")),
+        "__THREE__": _script_safe(three_script(), "three.module.min.js"),
+        "__SCENE__": _script_safe(_resource("web", "replay_scene.js"), "replay_scene.js"),
+        "__APP__": _script_safe(_resource("web", "replay_app.js"), "replay_app.js"),
     }
     pattern = re.compile("|".join(re.escape(k) for k in parts))
     return pattern.sub(lambda m: parts[m.group(0)], page)
@@ -106,8 +126,12 @@ def write_replay(
     file within ``budget_bytes``.
     """
     start = time.perf_counter()
+    if out is not None:
+        check_target(Path(out))  # before any work
     if not isinstance(run, RunData):
         run = load_run(run)
+    if out is None:
+        check_target(run.path / "replay.html")
     if run.n_frames == 0:
         raise TetherError(f"{run.path}: nothing to replay (robots.parquet has no rows)")
     fixed = _fixed_bytes()
@@ -116,9 +140,9 @@ def write_replay(
     payload = build_payload(run, budget_bytes=budget_bytes, fixed_bytes=fixed)
     text = render_html(payload.meta, payload.blob_b64)
     out_path = Path(out) if out is not None else run.path / "replay.html"
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    out_path.write_text(text, encoding="utf-8")
-    size = out_path.stat().st_size
+    data = text.encode("utf-8")
+    size = write_output(out_path, lambda tmp: Path(tmp).write_bytes(data), what="replay",
+                        run_dir=run.path)  # fmt: skip
     return Replay(
         out_path, size, payload.n_frames_shown, payload.stride, time.perf_counter() - start
     )
@@ -144,16 +168,45 @@ class _OneFileHandler(http.server.BaseHTTPRequestHandler):
         pass
 
 
-def make_server(path: str | Path, port: int = 0) -> http.server.ThreadingHTTPServer:
-    """An HTTP server for one replay file, bound to 127.0.0.1 only (``port`` 0: any free)."""
+def bind_server(port: int = 0) -> http.server.ThreadingHTTPServer:
+    """An HTTP server bound to 127.0.0.1 (``port`` 0: any free one), serving nothing yet.
+
+    Raises
+    ------
+    TetherError
+        The port is in use or not allowed: one line with the fix.
+    """
+    handler = type("Handler", (_OneFileHandler,), {"body": b"", "name": "replay.html"})
+    try:
+        return http.server.ThreadingHTTPServer(("127.0.0.1", port), handler)
+    except OSError as exc:
+        raise TetherError(
+            f"--port {port}: cannot serve on 127.0.0.1:{port} ({exc.strerror or exc}); choose "
+            "another --port, or --port 0 for any free one"
+        ) from None
+
+
+def make_server(
+    path: str | Path, port: int = 0, server: http.server.ThreadingHTTPServer | None = None
+) -> http.server.ThreadingHTTPServer:
+    """An HTTP server for one replay file, bound to 127.0.0.1 only (``port`` 0: any free);
+    ``server`` from :func:`bind_server` is used if given (bound before the file was made)."""
     file = Path(path)
-    handler = type("Handler", (_OneFileHandler,), {"body": file.read_bytes(), "name": file.name})
-    return http.server.ThreadingHTTPServer(("127.0.0.1", port), handler)
+    server = bind_server(port) if server is None else server
+    server.RequestHandlerClass.body = file.read_bytes()  # type: ignore[attr-defined]
+    server.RequestHandlerClass.name = file.name  # type: ignore[attr-defined]
+    return server
 
 
-def serve(path: str | Path, port: int = 0, *, announce: Any = print) -> None:
+def serve(
+    path: str | Path,
+    port: int = 0,
+    *,
+    announce: Any = print,
+    server: http.server.ThreadingHTTPServer | None = None,
+) -> None:
     """Serve a replay on 127.0.0.1 until interrupted (Ctrl-C)."""
-    server = make_server(path, port)
+    server = make_server(path, port, server)
     host, real_port = server.server_address[:2]
     announce(f"serving {path} at http://{host}:{real_port}/ (127.0.0.1 only; Ctrl-C stops)")
     thread = threading.Thread(target=server.serve_forever, daemon=True)

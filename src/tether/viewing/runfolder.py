@@ -30,6 +30,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from tether.errors import TetherError
+from tether.limits import memory_budget_bytes
 from tether.targets_recorded import (
     TARGET_ADDED,
     TARGET_FINISHED,
@@ -240,6 +241,27 @@ def load_world(scenario: Any) -> Any:
     return build_world(scenario, np.random.default_rng(scenario.seed))
 
 
+def _read_summary(file: Path) -> dict[str, Any]:
+    """``summary.json`` as a dict ({} if absent); a damaged one is a one-line error."""
+    if not file.exists():
+        return {}
+    try:
+        if file.stat().st_size > 16 * 2**20:
+            raise ValueError("over 16 MiB")
+        data = json.loads(file.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        reason = " ".join(str(getattr(exc, "strerror", None) or exc).split())[:80]
+        raise RunFolderError(
+            f"{file}: damaged ({reason}); run the scenario again to rewrite its run folder"
+        ) from None
+    if not isinstance(data, dict):
+        raise RunFolderError(
+            f"{file}: damaged (expected a JSON object of summary keys); run the scenario again "
+            "to rewrite its run folder"
+        )
+    return data
+
+
 def load_run(path: str | Path, *, world: bool = True) -> RunData:
     """Read the run folder at ``path`` (see module docstring)."""
     path = Path(path)
@@ -247,9 +269,7 @@ def load_run(path: str | Path, *, world: bool = True) -> RunData:
         raise RunFolderError(f"{path}: not a run folder (no such directory)")
     if not (path / "robots.parquet").exists():
         raise RunFolderError(f"{path}: not a run folder (robots.parquet is missing)")
-    summary: dict[str, Any] = {}
-    if (path / "summary.json").exists():
-        summary = json.loads((path / "summary.json").read_text())
+    summary = _read_summary(path / "summary.json")
     scenario = _scenario(path) if (path / "scenario.yaml").exists() else None
     robots = _read_table(path / "robots.parquet")
     for col in ("step", "robot", "x_m", "y_m"):
@@ -258,9 +278,18 @@ def load_run(path: str | Path, *, world: bool = True) -> RunData:
     dim = 3 if "z_m" in robots else 2
     frame_steps, frame_idx = np.unique(robots["step"].astype(np.int64), return_inverse=True)
     robot_idx = robots["robot"].astype(np.int64)
-    n = int(summary.get("n_robots", robot_idx.max() + 1 if len(robot_idx) else 0))
-    n = max(n, int(robot_idx.max()) + 1 if len(robot_idx) else 0)
+    if len(robot_idx) and robot_idx.min() < 0:
+        raise RunFolderError(f"{path / 'robots.parquet'}: column 'robot' has negative indices")
+    n = int(robot_idx.max()) + 1 if len(robot_idx) else 0
+    listed = summary.get("n_robots")
+    if isinstance(listed, int) and not isinstance(listed, bool) and n <= listed <= 2 * n + 1:
+        n = listed  # robots never recorded still count (and keep their index)
     t = len(frame_steps)
+    if t * n * (dim + 1) * 8 > memory_budget_bytes():
+        raise RunFolderError(
+            f"{path / 'robots.parquet'}: {t:,} recorded steps of {n:,} robots do not fit in "
+            "memory; is the table damaged?"
+        )
     positions = np.full((t, n, dim), np.nan)
     for d, col in enumerate(_POSITION_COLUMNS[:dim]):
         positions[frame_idx, robot_idx, d] = robots[col]
@@ -277,6 +306,14 @@ def load_run(path: str | Path, *, world: bool = True) -> RunData:
 
     base = summary.get("base_m")
     base_m = None
+    numbers = isinstance(base, list) and all(
+        isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v) for v in base
+    )
+    if base is not None and not (numbers and 2 <= len(base) <= 3):
+        raise RunFolderError(
+            f"{path / 'summary.json'}: base_m: expected [x, y] or [x, y, z] in metres "
+            f"(got {str(base)[:40]!r})"
+        )
     if base is not None:
         base_m = np.zeros(dim)
         base_m[: min(dim, len(base))] = np.asarray(base, dtype=float)[:dim]

@@ -30,10 +30,12 @@ from typing import Any
 import numpy as np
 import yaml
 
-from tether.config import MAX_LENGTH_M, YamlLoader
+from tether.atomic import atomic_write
+from tether.config import MAX_LENGTH_M
 from tether.errors import MapError
 from tether.world.grid import OccupancyGrid
 from tether.world.images import read_image
+from tether.yamlfile import read_yaml
 
 __all__ = [
     "MapLayers",
@@ -171,16 +173,15 @@ def _thresholds(source: Path, occupied: Any, free: Any) -> tuple[float, float]:
 
 def _read_yaml(path: Path) -> dict[str, Any]:
     try:
-        doc = yaml.load(path.read_text(encoding="utf-8"), Loader=YamlLoader)  # noqa: S506 (safe)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or "syntax error"
-        raise MapError.at(path, None, f"not valid YAML{where}: {problem}") from None
-    except UnicodeDecodeError:
-        raise MapError.at(
-            path, None, "not a text YAML file (is it an image? use the .png/.pgm)"
-        ) from None
+        doc = read_yaml(path, str(path), MapError, what="a map YAML file")
+    except OSError as exc:
+        raise MapError.at(path, None, f"cannot read file ({exc.strerror or exc})") from None
+    except MapError as exc:
+        if "not UTF-8" in str(exc):
+            raise MapError.at(
+                path, None, "not a text YAML file (is it an image? use the .png/.pgm)"
+            ) from None
+        raise
     if not isinstance(doc, dict):
         raise MapError.at(
             path,
@@ -291,6 +292,13 @@ def _layers(
     )
     occupied = _to_grid_layout(occupied)
     unknown = _to_grid_layout(unknown)
+    width_m = resolution * max(occupied.shape)
+    if width_m > MAX_LENGTH_M:
+        raise MapError.at(
+            meta["source"], "resolution",
+            f"{resolution:g} m per cell makes the map {width_m:.3g} m wide, more than "
+            f"{MAX_LENGTH_M:g} m; give a resolution in metres per cell, e.g. 0.05",
+        )  # fmt: skip
     grid = OccupancyGrid(occupied | unknown, resolution, origin)
     meta.update(occupied_thresh=occ_th, free_thresh=free_th, negate=negate)
     return MapLayers(grid=grid, occupied=occupied, unknown=unknown, meta=meta)
@@ -401,9 +409,9 @@ def save_map(
     rows, cols = image.shape
     path_image = path_yaml.with_suffix(".pgm")
     path_yaml.parent.mkdir(parents=True, exist_ok=True)
-    with open(path_image, "wb") as handle:
-        handle.write(f"P5\n# written by tether\n{cols} {rows}\n255\n".encode("ascii"))
-        handle.write(np.ascontiguousarray(image).tobytes())
+    header = f"P5\n# written by tether\n{cols} {rows}\n255\n".encode("ascii")
+    body = np.ascontiguousarray(image).tobytes()
+    atomic_write(path_image, lambda tmp: Path(tmp).write_bytes(header + body))
     doc = {
         "image": path_image.name,
         "mode": "trinary",
@@ -413,7 +421,8 @@ def save_map(
         "occupied_thresh": 0.65,
         "free_thresh": 0.196,
     }
-    path_yaml.write_text(yaml.safe_dump(doc, sort_keys=False), encoding="utf-8")
+    text = yaml.safe_dump(doc, sort_keys=False)
+    atomic_write(path_yaml, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
     return path_yaml
 
 
