@@ -1,6 +1,6 @@
 """Markdown tables of the Figs. 4-6 re-make, computed from the campaigns' run folders.
 
-:func:`markdown` makes the tables of ``docs/recurrent.md`` (``tether report --paper
+:func:`markdown` makes the tables of ``docs/explanation/recurrent.md`` (``tether report --paper
 recurrent`` writes them) for the runs of a :class:`RunIndex` (the run folders of each
 map and setting, found in the campaigns' sweep folders by :mod:`tether.recurrent.report`):
 explored area known at the BS after a third, two thirds and all of the steps (300, 600
