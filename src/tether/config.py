@@ -16,7 +16,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -27,6 +26,9 @@ from pydantic import (
 )
 
 from tether.errors import ScenarioError
+from tether.safe_yaml import MAX_YAML_VALUES as MAX_YAML_VALUES  # re-exported
+from tether.safe_yaml import YamlLoader as YamlLoader  # re-exported
+from tether.safe_yaml import parse_yaml as parse_yaml  # re-exported
 from tether.suggest import did_you_mean, keys_at
 from tether.sweepspec import MAX_SWEEP_COMBINATIONS as MAX_SWEEP_COMBINATIONS  # re-exported
 from tether.sweepspec import MAX_SWEEP_TRIALS as MAX_SWEEP_TRIALS  # re-exported
@@ -47,8 +49,6 @@ MAX_SEED = 2**63 - 1
 MAX_LABEL_BYTES = 80
 #: a scenario file larger than this is refused before it is parsed
 MAX_SCENARIO_BYTES = 16 * 2**20
-#: YAML aliases may repeat values, but the expanded document holds at most this many
-MAX_YAML_VALUES = 1_000_000
 
 #: a coordinate in metres (finite, within +-MAX_LENGTH_M)
 Coordinate = Annotated[float, Field(ge=-MAX_LENGTH_M, le=MAX_LENGTH_M, allow_inf_nan=False)]
@@ -66,20 +66,31 @@ class _Strict(BaseModel):
 class WorldConfig(_Strict):
     """The workspace: a registered scene (``free``, ``map``, ``town``, ...) and its parameters."""
 
-    scene: str = "free"
-    dim: Literal[2, 3] = 2
-    params: dict[str, Any] = Field(default_factory=dict)
+    scene: str = Field(default="free", description="registered scene name (`tether list`)")
+    dim: Literal[2, 3] = Field(default=2, description="dimension of the workspace")
+    params: dict[str, Any] = Field(
+        default_factory=dict, description="the scene's parameters (see the scene tables)"
+    )
 
 
 class SensingConfig(_Strict):
     """Sensing model (see :mod:`tether.sensing`)."""
 
-    range_m: float = Field(gt=0, le=MAX_LENGTH_M)
-    body_radius_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
-    occlusion: bool = True
-    radial_error_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
-    angular_error_deg: float = Field(default=0.0, ge=0, lt=90)
-    noise: Literal["none", "uniform", "bound"] = "uniform"
+    range_m: float = Field(gt=0, le=MAX_LENGTH_M, description="sensing range d_max")
+    body_radius_m: float = Field(
+        default=0.0, ge=0, le=MAX_LENGTH_M, description="robot body radius (bodies occlude)"
+    )
+    occlusion: bool = Field(default=True, description="robot bodies hide the robots behind them")
+    radial_error_m: float = Field(
+        default=0.0, ge=0, le=MAX_LENGTH_M, description="bound on the measured distance's error"
+    )
+    angular_error_deg: float = Field(
+        default=0.0, ge=0, lt=90, description="bound on the measured bearing's error"
+    )
+    noise: Literal["none", "uniform", "bound"] = Field(
+        default="uniform",
+        description="measurement errors: none, uniform within the bounds, or always at them",
+    )
 
     @model_validator(mode="after")
     def _radial_below_range(self) -> SensingConfig:
@@ -105,48 +116,77 @@ class InitConfig(_Strict):
     ``positions``: explicit ``(n, dim)`` list.
     """
 
-    kind: Literal["random_connected", "uniform", "grid", "positions"] = "random_connected"
-    spacing_m: float = Field(default=5.0, gt=0, le=MAX_LENGTH_M)
-    min_separation_m: float = Field(default=1.0, ge=0, le=MAX_LENGTH_M)
-    center: list[Coordinate] | None = None
-    extent_m: list[Annotated[float, Field(gt=0, le=MAX_LENGTH_M)]] | None = None
-    positions: list[list[Coordinate]] | None = None
+    kind: Literal["random_connected", "uniform", "grid", "positions"] = Field(
+        default="random_connected", description="how the team is placed"
+    )
+    spacing_m: float = Field(
+        default=5.0, gt=0, le=MAX_LENGTH_M, description="random_connected: link length; grid: pitch"
+    )
+    min_separation_m: float = Field(
+        default=1.0, ge=0, le=MAX_LENGTH_M, description="least distance between two robots"
+    )
+    center: list[Coordinate] | None = Field(
+        default=None,
+        description="centre of the placement (m; default: the world's centre, or the origin)",
+    )
+    extent_m: list[Annotated[float, Field(gt=0, le=MAX_LENGTH_M)]] | None = Field(
+        default=None, description="uniform: side lengths of the box"
+    )
+    positions: list[list[Coordinate]] | None = Field(
+        default=None, description="positions: one point (m) per robot"
+    )
 
 
 class TeamConfig(_Strict):
-    n_robots: int = Field(gt=0, le=MAX_ROBOTS)
-    init: InitConfig = Field(default_factory=InitConfig)
+    """The team: how many robots and where they start."""
+
+    n_robots: int = Field(gt=0, le=MAX_ROBOTS, description="number of robots")
+    init: InitConfig = Field(default_factory=InitConfig, description="initial placement")
 
 
 class SimConfig(_Strict):
-    dt_s: float = Field(default=1.0, gt=0, le=MAX_DT_S)
-    max_steps: int = Field(default=500, gt=0, le=MAX_STEPS)
-    collision_distance_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
+    """The simulation clock."""
+
+    dt_s: float = Field(default=1.0, gt=0, le=MAX_DT_S, description="time step (control period)")
+    max_steps: int = Field(default=500, gt=0, le=MAX_STEPS, description="steps at most")
+    collision_distance_m: float = Field(
+        default=0.0, ge=0, le=MAX_LENGTH_M, description="robots closer than this collide"
+    )
 
 
 class OutputConfig(_Strict):
-    dir: str = "runs"
-    record_every: int = Field(default=1, gt=0, le=MAX_STEPS)
-    figures: bool = True
+    """What a run writes."""
+
+    dir: str = Field(default="runs", description="folder the run folder is made in")
+    record_every: int = Field(
+        default=1, gt=0, le=MAX_STEPS, description="keep positions and links every k-th step"
+    )
+    figures: bool = Field(default=True, description="draw the PNG figures")
 
 
 class StrategyConfig(_Strict):
-    name: str
-    params: dict[str, Any] = Field(default_factory=dict)
+    """The strategy by name and its parameters."""
+
+    name: str = Field(description="registered strategy name (`tether list`)")
+    params: dict[str, Any] = Field(
+        default_factory=dict, description="the strategy's parameters (see its table)"
+    )
 
 
 class Scenario(_Strict):
     """A complete, validated scenario."""
 
-    name: str = Field(default="scenario", min_length=1, max_length=100)
-    description: str = ""
-    seed: int = Field(default=0, ge=0, le=MAX_SEED)
-    world: WorldConfig = Field(default_factory=WorldConfig)
-    team: TeamConfig
-    sensing: SensingConfig
-    sim: SimConfig = Field(default_factory=SimConfig)
-    strategy: StrategyConfig
-    output: OutputConfig = Field(default_factory=OutputConfig)
+    name: str = Field(
+        default="scenario", min_length=1, max_length=100, description="names the run folder"
+    )
+    description: str = Field(default="", description="free text for the reader")
+    seed: int = Field(default=0, ge=0, le=MAX_SEED, description="seed of every random draw")
+    world: WorldConfig = Field(default_factory=WorldConfig, description="the workspace")
+    team: TeamConfig = Field(description="the robots")
+    sensing: SensingConfig = Field(description="who senses whom")
+    sim: SimConfig = Field(default_factory=SimConfig, description="the simulation clock")
+    strategy: StrategyConfig = Field(description="the connectivity strategy")
+    output: OutputConfig = Field(default_factory=OutputConfig, description="what a run writes")
     sweep: dict[str, Any] = Field(
         default_factory=dict,
         description="axes (dotted scenario key -> values or range), zip groups and seeds, run by "
@@ -273,92 +313,6 @@ def paper_campaigns() -> list[str]:
     """Names of the papers' campaigns shipped with tether: ``paper/<name>`` (sweep files)."""
     files = (resources.files(BUILTIN_PACKAGE) / "paper").iterdir()
     return sorted(f"paper/{f.name[:-5]}" for f in files if f.name.endswith(".yaml"))
-
-
-def _yaml_problem(exc: yaml.YAMLError) -> str:
-    """A YAML parser error in one line: where and what."""
-    mark = getattr(exc, "problem_mark", None)
-    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-    problem = getattr(exc, "problem", None) or getattr(exc, "reason", None) or "invalid YAML"
-    return " ".join(f"not valid YAML{where}: {problem}".split())
-
-
-def _check_expansion(data: Any, label: str) -> None:
-    """Refuse YAML whose aliases expand beyond :data:`MAX_YAML_VALUES` values, or loop.
-
-    PyYAML builds an alias as a reference to one object, so a "billion laughs"
-    document loads in kilobytes and explodes only when copied or validated.
-    Sizes are counted once per distinct object (linear in the document), and
-    the top-level key holding the expansion is named.
-    """
-    sizes: dict[int, int] = {}
-    active: set[int] = set()
-
-    def size(obj: Any, field: str) -> int:
-        if isinstance(obj, dict):
-            children: Any = [*obj.keys(), *obj.values()]
-        elif isinstance(obj, list):
-            children = obj
-        else:
-            return 1
-        key = id(obj)
-        if key in sizes:
-            return sizes[key]
-        if key in active:
-            raise ScenarioError(
-                f"{label}: {field}: a YAML alias refers to a value that contains it (a loop); "
-                "write the value out"
-            )
-        active.add(key)
-        total = 1
-        for child in children:
-            total += size(child, field)
-            if total > MAX_YAML_VALUES:
-                raise ScenarioError(
-                    f"{label}: {field}: YAML aliases expand to more than {MAX_YAML_VALUES:,} "
-                    "values (an alias bomb?); write the values out or use fewer aliases"
-                )
-        active.discard(key)
-        sizes[key] = total
-        return total
-
-    try:
-        if isinstance(data, dict):
-            for key, value in data.items():
-                size(value, str(key))
-        else:
-            size(data, "(top level)")
-    except RecursionError:
-        raise ScenarioError(
-            f"{label}: (top level): values are nested too deeply; flatten the document"
-        ) from None
-
-
-class YamlLoader(yaml.SafeLoader):
-    """PyYAML's safe loader, with YAML 1.2's exponent floats (``1e-6``, ``2.5e3``): YAML
-    1.1, which PyYAML follows, reads them as strings unless they have a dot and a sign."""
-
-
-YamlLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
-
-
-def parse_yaml(text: str | bytes, label: str) -> Any:
-    """``yaml.safe_load`` bounded in time and memory, with one-line errors naming ``label``
-    (exponent floats as in YAML 1.2: :class:`YamlLoader`)."""
-    try:
-        data = yaml.load(text, Loader=YamlLoader)  # noqa: S506 (a SafeLoader)
-    except yaml.YAMLError as exc:
-        raise ScenarioError(f"{label}: {_yaml_problem(exc)}") from None
-    except RecursionError:
-        raise ScenarioError(
-            f"{label}: (top level): values are nested too deeply; flatten the document"
-        ) from None
-    _check_expansion(data, label)
-    return data
 
 
 def _read_yaml(path: Path, label: str) -> dict[str, Any]:
