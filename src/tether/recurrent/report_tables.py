@@ -121,7 +121,7 @@ def _mean(values: list) -> float | None:
     return float(np.mean(v)) if v else None
 
 
-#: summary keys of issue 13 that every setting's runs are summarized by
+#: the summary keys (times to explore, where the time goes) of every setting's table
 TIME_TO = ("time_to_50pct_s", "time_to_75pct_s", "time_to_90pct_s")
 SHARES = ("time_moving_frac", "time_relaying_frac", "time_waiting_frac", "time_returning_frac")
 
