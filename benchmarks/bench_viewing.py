@@ -1,6 +1,6 @@
 """Seeing a run: sizes and wall times of ``tether view``, ``animate`` and ``export``.
 
-The "Measured" table of docs/viewing.md. Each scenario is simulated with ``tether run``
+The "Measured" table of docs/how-to/viewing.md. Each scenario is simulated with ``tether run``
 into ``--runs`` (a fresh folder, ``--no-figures``), then each command is run on that
 folder from a fresh process, as a user would, and timed by the wall clock (so the times
 include starting Python, reading the folder and rebuilding the world):

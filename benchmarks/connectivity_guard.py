@@ -4,7 +4,7 @@ For ``connectivity_empty``, ``connectivity_town`` and ``connectivity_office`` an
 eigensolver setting (the exact solver; the decentralized estimator with 20, 100 and 300
 message rounds per sub-step, the built-in's own message faults kept), every seed runs
 with ``guard: detect``: nothing is vetoed, every sub-step outside the safe set is
-counted. Prints a Markdown table (the one in docs/continuous.md) and writes
+counted. Prints a Markdown table (the one in docs/explanation/continuous.md) and writes
 ``benchmarks/results/connectivity_guard.json``.
 
     python benchmarks/connectivity_guard.py                 # 5 seeds each

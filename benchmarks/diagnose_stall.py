@@ -13,7 +13,7 @@ Usage::
 
     python benchmarks/diagnose_stall.py RUN_FOLDER --at-s 900
 
-(``docs/multi_target.md``, the Fig. 9 town failure N = 25 seed 11, uses ``--at-s 900``.)
+(``docs/explanation/multi_target.md``, the Fig. 9 town failure N = 25 seed 11, uses ``--at-s 900``.)
 """
 
 from __future__ import annotations

@@ -162,7 +162,7 @@ def _mm(dyn: dict, key: str, unit: str) -> str:
 
 
 def markdown(result: dict, sizes: list[int]) -> str:
-    """The tables docs/multi_target.md quotes: medians against N, trends, completeness."""
+    """The tables of docs/explanation/multi_target.md: medians against N, trends, completeness."""
     out = []
     for scene, entry in result["scenes"].items():
         out += [f"**{scene}** ({entry['trials']} trials; a success of the controller -- every "

@@ -1,4 +1,4 @@
-"""Figures of docs/continuous.md: lambda2 over time in the three scenes, top view of the town.
+"""Figures of docs/explanation/continuous.md: lambda2 over time in three scenes, the town.
 
 Runs the builtin scenarios ``connectivity_empty``, ``connectivity_office`` and
 ``connectivity_town`` (into a temporary folder), reads the recorded

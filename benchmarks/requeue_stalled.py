@@ -5,7 +5,7 @@ Re-runs a run folder's ``scenario.yaml`` and, when the watchdog drops a target a
 its queue, so it is tried after its other targets). Prints the events of the re-queued
 target and the robot's distance to it every ``--every-s`` seconds, then the summary's
 target counts. An experiment, not a setting: it shows whether a later try, with the team
-in another configuration, gets there (``docs/multi_target.md``).
+in another configuration, gets there (``docs/explanation/multi_target.md``).
 
 Usage::
 

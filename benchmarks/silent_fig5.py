@@ -1,7 +1,7 @@
-"""Figs. 4 and 5 of the no-communication paper, re-made: the table and figures of docs/silent.md.
+"""Figs. 4 and 5 of the no-communication paper re-made: the table and figures of the silent page.
 
 Runs (resumably) the sweep of ``scenarios/silent_paper.yaml`` (d0 in {5, 8, 11}, seed 0),
-prints the Markdown table of ``docs/silent.md`` (steps to the goal, links min / max,
+prints the Markdown table of ``docs/explanation/silent.md`` (steps to the goal, links min / max,
 connected at every step, collisions), writes ``benchmarks/results/silent_fig5.json`` and
 copies the sweep's links figure and the snapshot of ``tether run silent_paper``
 (d0 = 11) to ``docs/figures/``::

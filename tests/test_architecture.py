@@ -2,7 +2,7 @@
 
 Every ``import`` statement counts, at module level or inside a function (an
 import inside a function hides a cycle from Python but not from a reader).
-Layers are those of ``docs/architecture.md``.
+Layers are those of ``docs/explanation/architecture.md``.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "tether.geometry",
             "tether.floats",
             "tether.config",
+            "tether.safe_yaml",
         ),
     ),
     ("world", ("tether.world",)),
@@ -51,7 +52,14 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("experiments", ("tether.experiments", "tether.recurrent.report")),
     (
         "interfaces",
-        ("tether.cli", "tether.__main__", "tether.terminal", "tether.viewing", "tether.export"),
+        (
+            "tether.cli",
+            "tether.__main__",
+            "tether.terminal",
+            "tether.viewing",
+            "tether.export",
+            "tether.reference",
+        ),
     ),
 ]
 

@@ -11,7 +11,7 @@ ROOT = Path(__file__).parents[1]
 SHARED = ROOT.parent / "shared"
 _BLOCK = re.compile(r"```python\n(.*?)```", re.DOTALL)
 
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 BLOCKS = [
     (page, k, code) for page in PAGES for k, code in enumerate(_BLOCK.findall(page.read_text()))
 ]

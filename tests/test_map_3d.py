@@ -1,4 +1,4 @@
-"""A new user's 3-D building from a floor plan: the example of docs/maps.md, run as written.
+"""A new user's 3-D building from a floor plan: the 3-D scene tutorial's example, as written.
 
 The block between ``<!-- 3d-map-example -->`` markers is the whole scenario (under 10
 lines). It names ``../shared/maps/offices.png`` beside the repository; where that folder
@@ -33,7 +33,7 @@ from tether.world.grid import OccupancyGrid, cells_spanning
 from tether.world.scenes import make_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-DOC = ROOT / "docs" / "maps.md"
+DOC = ROOT / "docs" / "tutorials" / "own-3d-scene.md"
 SHIPPED_OFFICE = ROOT / "src" / "tether" / "scenarios" / "maps" / "office.png"
 
 

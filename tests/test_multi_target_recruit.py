@@ -211,7 +211,7 @@ def test_help_lambda_factor_scales_only_the_helpers_force_the_same_compiled_or_n
 
 def test_help_lambda_factor_defaults_per_preset_and_can_be_switched_off() -> None:
     """Outdoors a helper's connectivity force is scaled by 0.1 unless a scenario says
-    otherwise; the office preset does not scale it (docs/multi_target.md, "Helpers")."""
+    otherwise; the office preset does not scale it (docs/explanation/multi_target.md, "Helpers")."""
     from tether.continuous.multi_target_params import MultiTargetParams
 
     assert MultiTargetParams().help_lambda_factor == 0.1

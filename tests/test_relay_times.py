@@ -1,6 +1,6 @@
 """Travel times behind the relay paths ``P_f`` (Sec. VI) match the simulated motion.
 
-Regression for the divergence of the theta = 1 / 3 report runs (docs/recurrent.md):
+Regression for the divergence of the theta = 1 / 3 report runs (docs/explanation/recurrent.md):
 after commit c892e38 (``wait_until = t + 1 + delay``), ``_bind`` still read
 ``wait_until - t`` as the steps a robot stands still, so every robot assigned by
 the current plan got one step more than the robots already under way; this

@@ -1,4 +1,4 @@
-"""docs/reproduction.md stays usable: its links resolve, its commands name real files.
+"""docs/explanation/reproduction.md stays usable: its links resolve, its commands name real files.
 
 The page links to sections of other docs for numbers that change (recurrent.md), so a
 renamed heading there must show up here, not as a dead link. The Fig. 9 section
@@ -15,7 +15,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-PAGE = DOCS / "reproduction.md"
+PAGE = DOCS / "explanation" / "reproduction.md"
 _LINK = re.compile(r"\]\(([^)#\s]+\.md)(?:#([^)\s]+))?\)")
 
 
@@ -38,7 +38,7 @@ def test_slug_matches_github():
     )
 
 
-@pytest.mark.parametrize("page", [PAGE, DOCS / "experiments.md"], ids=lambda p: p.name)
+@pytest.mark.parametrize("page", [PAGE, DOCS / "how-to" / "experiments.md"], ids=lambda p: p.name)
 def test_links_resolve_to_files_and_headings(page):
     links = _LINK.findall(page.read_text())
     assert links, f"{page.name} has no links to other docs"
@@ -60,4 +60,4 @@ def test_every_paper_file_named_exists_and_fig9_is_marked():
     rows = [line for line in section.splitlines() if line.startswith("| ") and "---" not in line]
     assert len(rows) >= 1 + 4  # a header, then the paper's four statements (and more)
     assert "benchmarks/results/fig9.json" in section and "python benchmarks/fig9.py" in section
-    assert "(docs/reproduction.md)" in (ROOT / "README.md").read_text()
+    assert "(docs/explanation/reproduction.md)" in (ROOT / "README.md").read_text()

@@ -359,7 +359,7 @@ def quick_block(block: dict[str, Any]) -> dict[str, Any]:
         raise SweepError(
             "sweep.quick",
             "the scenario has no quick size; add a quick entry to its sweep block "
-            "(docs/experiments.md, 'The quick size') or run it without --quick",
+            "(docs/how-to/experiments.md, 'The quick size') or run it without --quick",
         )
     raw_axes = block["axes"] if "axes" in block else {
         k: v for k, v in block.items() if k not in RESERVED

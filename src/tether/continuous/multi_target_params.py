@@ -60,8 +60,8 @@ class MultiTargetParams(ContinuousParams):
 
     targets: TargetsConfig = Field(default_factory=TargetsConfig)
     #: the certified small solver (``lapack``: ``dsyevr`` every sub-step, the eigenpair to
-    #: rounding, trajectories that differ in the last bits; the campaigns before the
-    #: seventh session ran with it)
+    #: rounding, trajectories that differ in the last bits; the campaigns run with
+    #: ``dsyevr`` used it)
     fiedler_method: Literal["auto", "lapack"] = "auto"
     r_grid_m: float = Field(default=0.75, gt=0)
     sigma: float = Field(default=3.0, ge=1)

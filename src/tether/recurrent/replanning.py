@@ -13,7 +13,7 @@ plans for them:
 5. the relay paths ``P_f`` bind robots until ``f``'s data reaches the BS
    (Sec. VI). ``relay_binding="frontiers"`` is the paper's rule: ``P_f`` for
    every frontier and fake frontier of the plan. ``"assigned"`` (the default,
-   a deviation chosen by measurement, see ``docs/recurrent.md``) also binds
+   a deviation chosen by measurement, see ``docs/explanation/recurrent.md``) also binds
    a ``P_f`` for every other robot the plan sends to a new goal (relays and
    re-assigned busy robots), so a relay is held until the chain that links
    its own goal to the BS has formed.
@@ -435,7 +435,7 @@ class RecurrentStrategy:
             scan = sim.cfg.scan_steps if sim.goal_kind[r] == GoalKind.FRONTIER else 0
             # robots assigned by this plan move from the next step on, like the
             # ones already under way: no extra step (it reordered P_f, see
-            # docs/recurrent.md)
+            # docs/explanation/recurrent.md)
             wait = sim.hold_steps(r)
             times[r] = wait + sim.remaining_distance(r) / sim.cfg.speed_cells + scan
         frontier_like = {v for v in assignment.values() if graph.kind[v] == FRONTIER} | fake

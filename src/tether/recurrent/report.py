@@ -18,7 +18,7 @@ their runs allow. The report writes, into ``--out`` (default: the first folder):
 * ``figures/recurrent_fig5.png``: explored area known at the BS over time for each
   theta and Utility (both coordinations); ``recurrent_fig6.png``: time out of
   communication; ``recurrent_fig_time.png``: where the robots' time goes;
-* ``recurrent_paper.md``: the tables of ``docs/recurrent.md``
+* ``recurrent_paper.md``: the tables of ``docs/explanation/recurrent.md``
   (:mod:`tether.recurrent.report_tables`) and the figures;
 * ``recurrent_paper.json``: per map and setting, final explored fractions, times out of
   communication, plan counts and times, with 95 % confidence intervals.

@@ -1,6 +1,6 @@
 """Markdown tables of the Figs. 4-6 re-make, computed from the campaigns' run folders.
 
-:func:`markdown` makes the tables of ``docs/recurrent.md`` (``tether report --paper
+:func:`markdown` makes the tables of ``docs/explanation/recurrent.md`` (``tether report --paper
 recurrent`` writes them) for the runs of a :class:`RunIndex` (the run folders of each
 map and setting, found in the campaigns' sweep folders by :mod:`tether.recurrent.report`):
 explored area known at the BS after a third, two thirds and all of the steps (300, 600
@@ -121,7 +121,7 @@ def _mean(values: list) -> float | None:
     return float(np.mean(v)) if v else None
 
 
-#: summary keys of issue 13 that every setting's runs are summarized by
+#: the summary keys (times to explore, where the time goes) of every setting's table
 TIME_TO = ("time_to_50pct_s", "time_to_75pct_s", "time_to_90pct_s")
 SHARES = ("time_moving_frac", "time_relaying_frac", "time_waiting_frac", "time_returning_frac")
 

@@ -63,7 +63,9 @@ class SignalParams(BaseModel):
     ref_power_dbm: float = Field(
         default=-40.0, ge=-300, le=300, description="received power at ref_distance_m"
     )
-    ref_distance_m: float = Field(default=1.0, gt=0, le=MAX_LENGTH_M)
+    ref_distance_m: float = Field(
+        default=1.0, gt=0, le=MAX_LENGTH_M, description="distance of ref_power_dbm"
+    )
     exponent: float = Field(default=2.5, gt=0, le=20, description="path-loss exponent")
     wall_loss_db: float = Field(default=3.0, ge=0, le=1000, description="per wall cell crossed")
     cutoff_dbm: float = Field(default=-70.0, ge=-300, le=300, description="receive threshold")
@@ -91,32 +93,44 @@ class ExplorationParams(BaseModel):
     model_config = finite_strict()
 
     speed_m_s: float = Field(
-        default=0.4, gt=0, le=MAX_LENGTH_M, description="4 cells/step at 0.1 m, 1 s steps"
+        default=0.4, gt=0, le=MAX_LENGTH_M, description="robot speed (4 cells per 1 s at 0.1 m)"
     )
-    fov_deg: float = Field(default=60.0, gt=0, le=360)
-    sensor_resolution_deg: float = Field(default=1.0, ge=0.01, le=360)
-    link_model: str = "los"
+    fov_deg: float = Field(default=60.0, gt=0, le=360, description="depth sensor's field of view")
+    sensor_resolution_deg: float = Field(
+        default=1.0, ge=0.01, le=360, description="angle between the depth sensor's rays"
+    )
+    link_model: str = Field(default="los", description="communication links: los, disk, signal")
     comm_range_m: float = Field(
-        default=15.0, gt=0, le=MAX_LENGTH_M, description="150 cells at 0.1 m"
+        default=15.0, gt=0, le=MAX_LENGTH_M, description="link range of los and disk"
     )
     coarse_cell_m: float = Field(
         default=0.3, gt=0, le=MAX_LENGTH_M, description="geodesic grid cell"
     )
-    scan_steps: int = Field(default=1, ge=1, le=10_000)
+    scan_steps: int = Field(
+        default=1, ge=1, le=10_000, description="steps a full turn at a frontier takes"
+    )
     base_m: list[Coordinate] | None = Field(default=None, description="BS position; random if null")
     signal: SignalParams = Field(default_factory=SignalParams, description="link_model: signal")
-    failures: FailureParams = Field(default_factory=FailureParams)
+    failures: FailureParams = Field(
+        default_factory=FailureParams, description="robots that fail during the run"
+    )
 
 
 class RecurrentParams(ExplorationParams):
     """The paper's BS planner (Sec. III-VI)."""
 
-    theta: int = Field(default=1, ge=1, le=100_000)
-    method: Literal["apx", "ilp"] = "apx"
-    delta: int = Field(default=4, ge=1, le=100_000)
-    backend: Literal["highs", "scip"] = "highs"
-    count_planning_time: bool = False
-    check: bool = False
+    theta: int = Field(
+        default=1, ge=1, le=100_000, description="replan when this many robots are ready"
+    )
+    method: Literal["apx", "ilp"] = Field(
+        default="apx", description="configuration solver: Algorithm 1 or the exact ILP"
+    )
+    delta: int = Field(default=4, ge=1, le=100_000, description="APX's parameter delta")
+    backend: Literal["highs", "scip"] = Field(default="highs", description="the ILP's solver")
+    count_planning_time: bool = Field(
+        default=False, description="robots wait out the planning time (the paper's Fig. 4a)"
+    )
+    check: bool = Field(default=False, description="check every plan, record violations")
     time_limit_s: float | None = Field(
         default=10.0, gt=0, le=1e7, description="per-plan budget of the ILP (APX as fallback)"
     )
@@ -129,7 +143,9 @@ class RecurrentParams(ExplorationParams):
 class UtilityParams(ExplorationParams):
     """The Utility baseline of de Hoog et al. (return when known-area ratio < ``ratio``)."""
 
-    ratio: float = Field(default=0.5, ge=0, le=1)
+    ratio: float = Field(
+        default=0.5, ge=0, le=1, description="return when the known-area ratio falls below"
+    )
     coordination: Literal["greedy", "none"] = Field(
         default="greedy",
         description="greedy: joint best-pair assignment inside communicating groups "

@@ -30,16 +30,24 @@ class TrajectoryParams(BaseModel):
     """Leader trajectory: ``waypoints`` at ``speed_mps``, or a Python function of time."""
 
     model_config = finite_strict()
-    kind: Literal["waypoints", "function"] = "waypoints"
-    waypoints: list[list[Coordinate]] | None = None
-    speed_mps: float = Field(default=1.0, gt=0, le=MAX_LENGTH_M)
+    kind: Literal["waypoints", "function"] = Field(
+        default="waypoints", description="a polyline of waypoints, or a Python function"
+    )
+    waypoints: list[list[Coordinate]] | None = Field(
+        default=None, description="waypoints: at least two points (m)"
+    )
+    speed_mps: float = Field(
+        default=1.0, gt=0, le=MAX_LENGTH_M, description="waypoints: the leader's speed"
+    )
     function: str | None = Field(
         default=None,
         description="'module:callable' mapping t_s -> position, in a module the user has "
         "loaded (never imported from the scenario: tether.usercode)",
         json_schema_extra=CODE_FIELD,
     )
-    goal_tolerance_m: float = Field(default=0.5, gt=0, le=MAX_LENGTH_M)
+    goal_tolerance_m: float = Field(
+        default=0.5, gt=0, le=MAX_LENGTH_M, description="the leader is at its goal within this"
+    )
 
     @model_validator(mode="after")
     def _complete(self) -> TrajectoryParams:
@@ -68,7 +76,9 @@ class SilentParams(BaseModel):
     """Parameters of the non-communicating strategy (paper section V defaults)."""
 
     model_config = finite_strict()
-    cost: Literal["desired_distance", "farthest"] = "desired_distance"
+    cost: Literal["desired_distance", "farthest"] = Field(
+        default="desired_distance", description="cost (13) with d0, or cost (12)"
+    )
     d0_m: float = Field(
         default=11.0, gt=0, le=MAX_LENGTH_M, description="desired distance d0 of cost (13)"
     )
@@ -77,9 +87,13 @@ class SilentParams(BaseModel):
         default=None,
         description="index of the leader R_N (default: the robot nearest the trajectory's start)",
     )
-    trajectory: TrajectoryParams
-    max_speed_mps: float | None = Field(default=None, gt=0, le=MAX_LENGTH_M)
-    min_separation_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
+    trajectory: TrajectoryParams = Field(description="the leader's path")
+    max_speed_mps: float | None = Field(
+        default=None, gt=0, le=MAX_LENGTH_M, description="speed bound (null: none)"
+    )
+    min_separation_m: float = Field(
+        default=0.0, ge=0, le=MAX_LENGTH_M, description="steps keep robots this far apart"
+    )
     search_directions: bool = Field(
         default=True,
         description="if the desired direction is blocked, also try heading at each sensed "

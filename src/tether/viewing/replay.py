@@ -5,7 +5,7 @@ Everything the page needs is inside it: three.js r170 (vendored in
 and the run's data (:mod:`tether.viewing.payload`). A Content-Security-Policy of
 ``default-src 'none'`` forbids the page from fetching anything, so it opens
 from ``file://`` offline and cannot call home. Why three.js rather than
-plotly: see ``docs/viewing.md``.
+plotly: see ``docs/how-to/viewing.md``.
 """
 
 from __future__ import annotations

@@ -85,16 +85,30 @@ def town(
     ----------
     rng
         Source of all randomness.
-    size_m, height_m, resolution_m
-        Extent of the 3-D grid and its cell size.
-    street_m, block_m, building_height_m
-        ``[min, max]`` ranges drawn uniformly.
+    size_m
+        Extent ``[x, y]`` of the town in m.
+    height_m
+        Height of the 3-D grid in m; buildings this tall cannot be flown over.
+    resolution_m
+        Cell size of the grid in m.
+    street_m
+        ``[min, max]`` street width in m, drawn uniformly.
+    block_m
+        ``[min, max]`` block length in m, drawn uniformly.
+    building_height_m
+        ``[min, max]`` building height in m, drawn uniformly.
+    setback_m
+        A building is set back up to this far from its lot's edges, in m.
+    empty_lot_p
+        Probability that a lot is left empty (a square).
     point_spacing_m
-        Spacing of the obstacle points on building surfaces; ``None`` (default)
+        Spacing of the obstacle points on building surfaces in m; ``None`` (default)
         keeps one per surface cell, about 8 x 10^4 points for the default town
         (0.5 m gives about 2 x 10^4).
-    dim, slice_height_m
-        ``dim=2`` returns the horizontal slice at ``slice_height_m``.
+    dim
+        3, or 2 for the horizontal slice at ``slice_height_m``.
+    slice_height_m
+        Height of the 2-D slice in m.
     """
     size = check_size("town", "size_m", size_m, 2)
     height = check_positive("town", "height_m", height_m)
@@ -177,6 +191,34 @@ def office(
 
     ``meta`` holds ``rooms`` and ``doors`` as ``[x0, y0, x1, y1]`` boxes and
     ``corridor`` likewise; ``dim=2`` returns the slice at ``slice_height_m``.
+
+    Parameters
+    ----------
+    rng
+        Source of all randomness.
+    size_m
+        Extent ``[x, y]`` of the floor in m.
+    height_m
+        Height of the floor (the ceiling) in m.
+    resolution_m
+        Cell size of the grid in m.
+    corridor_m
+        Width of the corridor in m.
+    room_m
+        ``[min, max]`` room width along the corridor in m, drawn uniformly.
+    door_m
+        Width of a door in m.
+    door_height_m
+        Height of a door in m.
+    wall_m
+        Thickness of a wall in m.
+    point_spacing_m
+        Spacing of the obstacle points on wall surfaces in m; ``None``: one per
+        surface cell.
+    dim
+        3, or 2 for the horizontal slice at ``slice_height_m``.
+    slice_height_m
+        Height of the 2-D slice in m.
     """
     size = check_size("office", "size_m", size_m, 2)
     height = check_positive("office", "height_m", height_m)

@@ -70,7 +70,17 @@ __all__ = [
 
 @SCENES.register("free")
 def free(rng: np.random.Generator | None = None, *, dim: int = 2, bounds_m: Any = None) -> World:
-    """Obstacle-free space, unbounded or within ``bounds_m`` (``[[lo...], [hi...]]``)."""
+    """Obstacle-free space, unbounded or within ``bounds_m`` (``[[lo...], [hi...]]``).
+
+    Parameters
+    ----------
+    rng
+        Unused (the scene has no random choice).
+    dim
+        Dimension of the space (``world.dim``).
+    bounds_m
+        ``[[lower corner], [upper corner]]`` in m; ``None``: unbounded.
+    """
     if dim not in (2, 3):
         raise ScenarioError(f"scene 'free': dim: must be 2 or 3 (got {dim!r})")
     if bounds_m is not None:
@@ -97,6 +107,17 @@ def empty(
     A ``size_m[0] x size_m[1] x height_m`` box (default 50 m x 70 m x 10 m, the
     paper gives no height) with an all-free grid, so grid-based planners work
     unchanged, and no obstacle points.
+
+    Parameters
+    ----------
+    rng
+        Unused (the scene has no random choice).
+    size_m
+        Extent ``[x, y]`` of the box in m.
+    height_m
+        Height of the box in m.
+    resolution_m
+        Cell size of the grid in m.
     """
     size = check_size("empty", "size_m", size_m, 2)
     height = check_positive("empty", "height_m", height_m)
@@ -131,6 +152,31 @@ def map_scene(
     bounds (:func:`tether.world.extrude.extrude`). Obstacle points are the centres of the
     obstacles' boundary cells (in 3-D, the walls' faces), thinned to about one per
     ``point_spacing_m`` if given.
+
+    Parameters
+    ----------
+    rng
+        Unused (the scene has no random choice).
+    path
+        The map file: PNG/PGM image or ROS map_server YAML.
+    resolution_m
+        Cell size in m; overrides the YAML's (an image alone: 1 m per pixel).
+    origin_m
+        ``[x, y]`` of the lower-left corner in m; overrides the YAML's.
+    occupied_thresh
+        Occupancy probability above which a pixel is an obstacle, in [0, 1].
+    free_thresh
+        Occupancy probability below which a pixel is free, in [0, 1].
+    negate
+        Dark pixels are free, light ones occupied.
+    dim
+        2, or 3 to raise the obstacles to walls (``world.dim``).
+    height_m
+        3-D only: the ceiling, the walls' height in m.
+    cell_m
+        Coarser cells in m, a whole multiple of the map's resolution.
+    point_spacing_m
+        Obstacle points thinned to about one per this distance in m.
     """
     if dim not in (2, 3) or isinstance(dim, bool):
         raise ScenarioError(f"scene 'map': dim: must be 2 or 3 (got {dim!r})")
@@ -192,6 +238,25 @@ def user_points(
     about (:class:`~tether.errors.TetherWarning`). Points outside the bounds are dropped.
     The world's obstacle points are the remaining user points (with ``inflate_m``, the
     faces of the inflated obstacles).
+
+    Parameters
+    ----------
+    rng
+        Unused (the scene has no random choice).
+    path
+        The point file: ``.npy``, ``.csv`` or ``.xyz`` rows of x y [z] in m.
+    bounds_m
+        ``[[lower corner], [upper corner]]`` of the grid in m; ``None``: from the points.
+    resolution_m
+        Cell size of the grid in m.
+    margin_m
+        Default bounds: the points' box grown by this in x and y, in m.
+    floor_m
+        3-D: the lowest z of the grid in m (default: the lowest point).
+    ceiling_m
+        3-D: the highest z of the grid in m (default: above the highest points' cells).
+    inflate_m
+        Cells within this distance of a point are obstacles too, in m.
     """
     points = load_points(path)
     dim = points.shape[1]

@@ -97,7 +97,7 @@ def bands(
     # the first band's width scales with the delta-th utility, not the best subset's: one
     # frontier far more useful than the rest (a robot next to it) would put every subset
     # holding it into one band (C(109, 3) = 209 k subsets where the search stopped after
-    # 16 k, issue 14)
+    # 16 k)
     width = float(uf[min(delta, len(uf)) - 1]) * FIRST_BAND
     hi, lo, last = np.inf, top - width, 0
     while True:
@@ -119,8 +119,8 @@ def bands(
             return
         # widths double (as Algorithm 1's bands), but a band never reaches below
         # LOWEST_BAND_RATIO of its upper end: the number of subsets grows steeply as the
-        # utility falls, and Step 10 usually stops inside the band (issue 14: one band of
-        # 1.9 M subsets cost 2 s where the search stopped in its first thousands)
+        # utility falls, and Step 10 usually stops inside the band (one band of 1.9 M
+        # subsets cost 2 s where the search stopped in its first thousands)
         # ... and narrower in proportion when, at the growth from the last band to this
         # one, it would hold more than BAND_SUBSETS subsets (they crowd at lower
         # utilities: a wide last band was mostly made after the subset that stopped the

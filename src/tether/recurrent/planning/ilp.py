@@ -3,7 +3,7 @@
 Two models with the same optimum, chosen by :data:`FORMULATION`: the
 node-separator model of :mod:`.ilp_node` (the default: vertex variables only,
 (4) on vertex separators; about 10 times faster on the benchmark, see
-``docs/recurrent_planning.md``) and the paper's directed-cut model below
+``docs/explanation/recurrent_planning.md``) and the paper's directed-cut model below
 (:mod:`.ilp_model`). Both share the reductions, the APX incumbent and the
 backends.
 

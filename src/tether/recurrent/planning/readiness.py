@@ -16,7 +16,7 @@ send them a plan), so readiness also requires a current link to the BS.
 
 Which robots get a ``P_f`` is :func:`binding_targets`: the paper's rule (its
 frontiers and fake frontiers) or, the planner's default, every robot the plan
-sends somewhere (``docs/recurrent.md`` explains the deviation).
+sends somewhere (``docs/explanation/recurrent.md`` explains the deviation).
 """
 
 from __future__ import annotations
