@@ -51,7 +51,14 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("experiments", ("tether.experiments", "tether.recurrent.report")),
     (
         "interfaces",
-        ("tether.cli", "tether.__main__", "tether.terminal", "tether.viewing", "tether.export"),
+        (
+            "tether.cli",
+            "tether.__main__",
+            "tether.terminal",
+            "tether.viewing",
+            "tether.export",
+            "tether.envs",
+        ),
     ),
 ]
 

@@ -59,8 +59,7 @@ class Episode:
         self.weights = options.weights()
         self.seed: int | None = None
         self._reset_built(self.scenario.seed)
-        self.obs_size = obs_size(self.setting.dim, options.max_neighbours,
-                                 options.map_patch_cells)  # fmt: skip
+        self.obs_size = obs_size(self.setting.dim, options.max_neighbours, options.map_patch_cells)
 
     # -- building --------------------------------------------------------------------
     def _reset_built(self, seed: int) -> None:
@@ -101,8 +100,17 @@ class Episode:
         self.term_sums: dict[str, float] = dict.fromkeys(self.weights, 0.0)
         self.terminated = self.truncated = False
         rec = self._metrics()
-        self.terms = step_terms(rec, self.obs, self._nodes(), s.n, s.link_range_m, progress=0.0,
-                                targets=0, blocked=0, clearance=self._clearance())  # fmt: skip
+        self.terms = step_terms(
+            rec,
+            self.obs,
+            self._nodes(),
+            s.n,
+            s.link_range_m,
+            progress=0.0,
+            targets=0,
+            blocked=0,
+            clearance=self._clearance(),
+        )
         self._record(rec, first=True)
         return self.observe()
 
@@ -114,8 +122,7 @@ class Episode:
             raise RuntimeError("the episode is over; call reset() first")
         actions = self._checked(actions)
         pending, self._pending = self._pending, None
-        scripted = (self.scripted and pending is not None
-                    and np.array_equal(actions, pending[0]))  # fmt: skip
+        scripted = self.scripted and pending is not None and np.array_equal(actions, pending[0])
         if not scripted:
             self.scripted = False  # the strategy's own state no longer matches the team's
         s = self.setting
@@ -135,10 +142,17 @@ class Episode:
             t_s = self.step_count * s.dt_s
             progress, targets = self.task.update(q_old, q, t_s)
             rec = self._metrics()
-            self.terms = step_terms(rec, self.obs, self._nodes(), s.n, s.link_range_m,
-                                    progress=progress, targets=targets,
-                                    blocked=int(blocked.sum()),
-                                    clearance=self._clearance())  # fmt: skip
+            self.terms = step_terms(
+                rec,
+                self.obs,
+                self._nodes(),
+                s.n,
+                s.link_range_m,
+                progress=progress,
+                targets=targets,
+                blocked=int(blocked.sum()),
+                clearance=self._clearance(),
+            )
         r = reward(self.terms, self.weights)
         self.episode_return += r
         for name, value in self.terms.items():
@@ -158,15 +172,25 @@ class Episode:
         of the episode).
         """
         if not self.scripted:
-            why = ("this scenario's strategy has no scripted policy" if self.setting.kind
-                   not in SCRIPTED_KINDS else "other actions were taken in this episode")  # fmt: skip
+            why = (
+                "this scenario's strategy has no scripted policy"
+                if self.setting.kind not in SCRIPTED_KINDS
+                else "other actions were taken in this episode"
+            )
             raise RuntimeError(f"no scripted actions: {why}; reset() starts a new episode")
         if self.terminated or self.truncated:
             raise RuntimeError("the episode is over; call reset() first")
         s = self.setting
         state = TeamState(self.state.positions, self._strategy_velocities, self.state.fixed)
-        ctx = StepContext(self.step_count, self.step_count * s.dt_s, s.dt_s, self.built.world,
-                          state, self.obs, self.rng)  # fmt: skip
+        ctx = StepContext(
+            self.step_count,
+            self.step_count * s.dt_s,
+            s.dt_s,
+            self.built.world,
+            state,
+            self.obs,
+            self.rng,
+        )
         with _few_blas_threads():
             moved = self.built.strategy.step(ctx)
         actions, _ = landing_actions(self.state.positions, moved.positions, s.step_m)
@@ -195,8 +219,13 @@ class Episode:
 
     def _metrics(self) -> StepRecord:
         s = self.setting
-        rec = team_metrics(self.step_count, self.step_count * s.dt_s, self.state.positions,
-                           self.obs, s.collision_distance_m)  # fmt: skip
+        rec = team_metrics(
+            self.step_count,
+            self.step_count * s.dt_s,
+            self.state.positions,
+            self.obs,
+            s.collision_distance_m,
+        )
         self.records.append(rec)
         return rec
 
@@ -210,12 +239,17 @@ class Episode:
         """``(n, obs_size)`` float32 observations of the current state."""
         s = self.setting
         return observations(
-            self.obs, self.state.positions, self.state.velocities, self.origin,
+            self.obs,
+            self.state.positions,
+            self.state.velocities,
+            self.origin,
             self.task.offsets(self.state.positions, self.step_count * s.dt_s),
-            max_speed_mps=s.max_speed_mps, range_m=s.link_range_m,
-            max_neighbours=self.options.max_neighbours, world=self.built.world,
+            max_speed_mps=s.max_speed_mps,
+            range_m=s.link_range_m,
+            max_neighbours=self.options.max_neighbours,
+            world=self.built.world,
             patch_cells=self.options.map_patch_cells,
-        )  # fmt: skip
+        )
 
     # -- records ----------------------------------------------------------------------
     def _record(self, rec: StepRecord, first: bool) -> None:
@@ -226,10 +260,13 @@ class Episode:
         values = dict(strategy.step_values()) if own else {}
         robot_values = dict(strategy.robot_values()) if own else {}
         events = strategy.drain_events() if own else []
-        values.update(reward=0.0 if first else reward(self.terms, self.weights),
-                      task_progress=self.terms["progress"])  # fmt: skip
-        self.recorder.record(rec, self.state, self.obs, events, values,
-                             robot_values if self.scripted else {})  # fmt: skip
+        values.update(
+            reward=0.0 if first else reward(self.terms, self.weights),
+            task_progress=self.terms["progress"],
+        )
+        self.recorder.record(
+            rec, self.state, self.obs, events, values, robot_values if self.scripted else {}
+        )
 
     def metrics(self) -> dict[str, Any]:
         """The episode's own summary keys: its return, every term's sum, the task's."""
@@ -264,5 +301,13 @@ class Episode:
             cpu_time_s=time.process_time() - self.cpu_start,
         )
         folder = RunFolder(Path(out_dir))
-        return write_run(folder, built, self.recorder, result, self.seed, result.wall_time_s,
-                         figures=figures, extra={"environment": self.metrics()})  # fmt: skip
+        return write_run(
+            folder,
+            built,
+            self.recorder,
+            result,
+            self.seed,
+            result.wall_time_s,
+            figures=figures,
+            extra={"environment": self.metrics()},
+        )

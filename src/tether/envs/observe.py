@@ -26,11 +26,14 @@ import numpy as np
 from tether.sensing import Observation
 from tether.world.world import World
 
+#: every observation element lies in [-OBS_LIMIT, OBS_LIMIT] (positions are in link ranges)
+OBS_LIMIT = 1e5
+
 
 def obs_size(dim: int, max_neighbours: int, patch_cells: int) -> int:
     """Length of one agent's observation vector."""
-    return 3 * dim + 1 + max_neighbours * (dim + 2) + (2 * patch_cells + 1) ** dim * (
-        patch_cells > 0
+    return (
+        3 * dim + 1 + max_neighbours * (dim + 2) + (2 * patch_cells + 1) ** dim * (patch_cells > 0)
     )
 
 
@@ -95,4 +98,5 @@ def observations(
     ]
     if patch_cells > 0:
         parts.append(map_patch(world, positions, patch_cells))
-    return np.concatenate(parts, axis=1).astype(np.float32)
+    out = np.concatenate(parts, axis=1)
+    return np.clip(out, -OBS_LIMIT, OBS_LIMIT).astype(np.float32)

@@ -17,8 +17,9 @@ from tether.sensing import Observation
 from tether.sim import StepRecord
 
 
-def bottleneck_margin(n_nodes: int, pairs: np.ndarray, lengths_m: np.ndarray,
-                      range_m: float) -> float:  # fmt: skip
+def bottleneck_margin(
+    n_nodes: int, pairs: np.ndarray, lengths_m: np.ndarray, range_m: float
+) -> float:
     """``1 - L / range_m`` with ``L`` the longest link of a shortest spanning tree (the
     smallest length such that the links no longer than it connect every node); 0 when
     the graph is disconnected, 1 for a single node."""
@@ -38,8 +39,7 @@ def base_fraction(n: int, n_nodes: int, pairs: np.ndarray) -> float:
     """Fraction of the ``n`` robots in a component with a fixed node (nodes ``n..``)."""
     if n_nodes <= n:
         return 0.0
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
-                       shape=(n_nodes, n_nodes))  # fmt: skip
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_nodes, n_nodes))
     _, label = connected_components(graph, directed=False)
     return float(np.isin(label[:n], label[n:]).mean())
 

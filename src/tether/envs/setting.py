@@ -110,25 +110,43 @@ def make_setting(built: Built, options: EnvOptions) -> Setting:
     collision = scenario.sim.collision_distance_m
     clearance = options.clearance_m if options.clearance_m is not None else collision / 2
     fixed = built.initial.fixed
-    return Setting(kind, built.initial.n, built.initial.dim, scenario.sim.dt_s,
-                   scenario.sim.max_steps, _speed(built, kind, options), sensor, link_range,
-                   collision, clearance, None if fixed is None else fixed.copy())  # fmt: skip
+    return Setting(
+        kind,
+        built.initial.n,
+        built.initial.dim,
+        scenario.sim.dt_s,
+        scenario.sim.max_steps,
+        _speed(built, kind, options),
+        sensor,
+        link_range,
+        collision,
+        clearance,
+        None if fixed is None else fixed.copy(),
+    )
 
 
 def make_task(built: Built, setting: Setting, options: EnvOptions) -> NoTask:
     """The task of ``built`` (call after the strategy's ``reset``: the leader is chosen there)."""
     strategy, scenario = built.strategy, built.scenario
     if setting.kind == "leader":
-        return LeaderPath(strategy.leader, strategy.trajectory, strategy.speed_mps,
-                          setting.dt_s, 2 * strategy.d_max_m, strategy.goal_tolerance_m)  # fmt: skip
+        return LeaderPath(
+            strategy.leader,
+            strategy.trajectory,
+            strategy.speed_mps,
+            setting.dt_s,
+            2 * strategy.d_max_m,
+            strategy.goal_tolerance_m,
+        )
     if setting.kind == "continuous":
         ext = strategy.params.external
         if ext.kind == "goal" and ext.robots:
             return Goals(ext.robots, np.asarray(ext.goals, dtype=float))
         return NoTask()
     if setting.kind == "targets":
-        queues = [[(t.position_m.copy(), t.stay_s, t.appear_s) for t in queue]
-                  for queue in strategy.targets.queues]  # fmt: skip
+        queues = [
+            [(t.position_m.copy(), t.stay_s, t.appear_s) for t in queue]
+            for queue in strategy.targets.queues
+        ]
         return Targets(queues, strategy.params.rz_m, setting.dt_s)
     if setting.kind == "exploration" and setting.fixed is not None:
         cell = options.coverage_cell_m or scenario.sensing.range_m / 5

@@ -55,8 +55,15 @@ class NoTask:
 class LeaderPath(NoTask):
     """The leader follows its path (``trajectory``: a :class:`Polyline` or a function of time)."""
 
-    def __init__(self, leader: int, trajectory: Any, speed_mps: float, dt_s: float,
-                 window_m: float, goal_tolerance_m: float) -> None:  # fmt: skip
+    def __init__(
+        self,
+        leader: int,
+        trajectory: Any,
+        speed_mps: float,
+        dt_s: float,
+        window_m: float,
+        goal_tolerance_m: float,
+    ) -> None:
         self.leader = leader
         self.trajectory = trajectory
         self.carrot_m = speed_mps * dt_s
@@ -128,8 +135,10 @@ class Goals(NoTask):
         return out, flag
 
     def metrics(self) -> dict[str, Any]:
-        return {"task_goal_distance_m": float(self.last_m.sum()),
-                "task_goal_distance_start_m": float(self.start_m.sum())}  # fmt: skip
+        return {
+            "task_goal_distance_m": float(self.last_m.sum()),
+            "task_goal_distance_start_m": float(self.start_m.sum()),
+        }
 
 
 class Targets(NoTask):
@@ -138,8 +147,9 @@ class Targets(NoTask):
     ``queues[r]`` lists ``(position_m, stay_s, appear_s)`` of robot ``r``'s targets.
     """
 
-    def __init__(self, queues: list[list[tuple[np.ndarray, float, float]]], rz_m: float,
-                 dt_s: float) -> None:  # fmt: skip
+    def __init__(
+        self, queues: list[list[tuple[np.ndarray, float, float]]], rz_m: float, dt_s: float
+    ) -> None:
         self.queues = queues
         self.rz_m = rz_m
         self.dt_s = dt_s
@@ -189,8 +199,11 @@ class Targets(NoTask):
         return self.completed >= self.total
 
     def metrics(self) -> dict[str, Any]:
-        return {"task_targets_completed": self.completed, "task_targets_total": self.total,
-                "task_completion_time_s": self.completion_s}  # fmt: skip
+        return {
+            "task_targets_completed": self.completed,
+            "task_targets_total": self.total,
+            "task_completion_time_s": self.completion_s,
+        }
 
 
 class Coverage(NoTask):
