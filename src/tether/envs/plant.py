@@ -19,9 +19,17 @@ from tether.world.world import World
 NORM_TOLERANCE = 1e-9
 
 
+def row_norms(x: np.ndarray) -> np.ndarray:
+    """Euclidean norm of each row, its squares summed in coordinate order (as the kernels)."""
+    acc = x[:, 0] * x[:, 0]
+    for c in range(1, x.shape[1]):
+        acc = acc + x[:, c] * x[:, c]
+    return np.sqrt(acc)
+
+
 def bounded(actions: np.ndarray) -> np.ndarray:
     """``actions`` with every row no longer than 1 (longer rows scaled to length 1)."""
-    norm = np.sqrt(np.einsum("kd,kd->k", actions, actions))
+    norm = row_norms(actions)
     long = norm > 1.0 + NORM_TOLERANCE
     if not long.any():
         return actions
