@@ -59,6 +59,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "tether.viewing",
             "tether.export",
             "tether.reference",
+            "tether.envs",
         ),
     ),
 ]

@@ -44,7 +44,7 @@ from tether.registry import SCENES, STRATEGIES
 from tether.runfolder import RunFolder
 from tether.scenario_world import STAND_IN_KEY, build_world, keep_scene_files, scene_files
 from tether.sensing import SensorModel, sensed_pairs
-from tether.sim import Strategy, TeamState, simulate
+from tether.sim import RunResult, Strategy, TeamState, simulate
 from tether.suggest import did_you_mean
 from tether.sweepspec import canonical, value_key
 from tether.team import initial_positions
@@ -367,6 +367,31 @@ def run(
     except BaseException:
         folder.abort()
         raise
+    summary = write_run(folder, built, recorder, result, seed, wall, figures=figures)
+    return RunOutcome(path, summary)
+
+
+def write_run(
+    folder: RunFolder,
+    built: Built,
+    recorder: TrajectoryRecorder,
+    result: RunResult,
+    seed: int,
+    wall_time_s: float,
+    *,
+    figures: bool | None = None,
+    extra: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Write a simulated run into ``folder`` and commit it; returns its summary.
+
+    What :func:`run` writes after :func:`tether.sim.simulate`: the scenario, the tables of
+    ``recorder``, the figures (``figures``: ``None`` follows ``output.figures``), then
+    ``summary.json`` (:func:`tether.record.summarize`, plus ``extra`` keys) last. Any other
+    loop that fills a :class:`TrajectoryRecorder` and a :class:`RunResult` the same way
+    (an environment episode) writes its run folder through this function.
+    """
+    scenario = built.scenario
+    path = folder.path
     try:
         data = scenario.model_dump(mode="json")
         kept = keep_scene_files(folder.staging, data, scene_files(scenario)[1])
@@ -378,9 +403,11 @@ def run(
         if scenario.output.figures if figures is None else figures:
             for name, fig in run_figures(built, recorder).items():
                 folder.save_figure(fig, name)
-        summary = summarize(scenario, seed, result, wall)
+        summary = summarize(scenario, seed, result, wall_time_s)
         if kept:  # the files the world read: their copies and hashes
             summary["scene_files"] = kept
+        if extra:
+            summary = {**summary, **extra}
         folder.commit(summary)
     except OSError as exc:  # the disk filled up, the folder was removed, ...
         folder.abort()
@@ -390,7 +417,7 @@ def run(
     except BaseException:
         folder.abort()
         raise
-    return RunOutcome(path, summary)
+    return summary
 
 
 def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Any]:
@@ -424,4 +451,4 @@ def run_figures(built: Built, recorder: TrajectoryRecorder) -> dict[str, Any]:
 
 
 __all__ = ["Built", "RunOutcome", "TetherError", "as_scenario", "build", "build_world",
-           "check_seed", "run", "run_figures"]  # fmt: skip
+           "check_seed", "run", "run_figures", "write_run"]  # fmt: skip

@@ -1,0 +1,183 @@
+"""One step of many copies of a team in one compiled call (numba): moves, links, lambda2.
+
+:func:`step_all` does, for every copy, what :class:`tether.envs.episode.Episode` does
+for one (without sensing noise): the move of :mod:`tether.envs.plant`, the sensed links
+(range by :func:`~tether.graph.kernels.pairs_within_kernel`, line of sight on the grid by
+:func:`~tether.world.los_kernels.segment_free_kernel`, occlusion by robot bodies by
+:func:`~tether.sensing.robots_kernels.occluded_kernel`), components by union-find,
+lambda2 of the unweighted Laplacian (LAPACK ``dsyevd`` through ``eigvalsh``), the
+bottleneck margin (Kruskal), close pairs, then the task (:mod:`.vector_tasks`), the
+observations and the rewards. Python is entered once per step for all copies, so small
+teams are not dominated by interpreter overhead.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from tether.envs.vector_tasks import observe_copy, task_copy
+from tether.envs.vector_world import point_free, segment_clear
+from tether.graph.kernels import pairs_within_kernel
+from tether.sensing.robots_kernels import occluded_kernel
+
+#: term indices (the order of tether.envs.options.TERMS)
+PROGRESS, TARGETS, CONNECTED, DISCONNECTED, LAMBDA2, MARGIN, BASE, COLLISIONS = range(8)
+BLOCKED, CLEARANCE = 8, 9
+N_TERMS = 10
+
+
+@njit(cache=True)
+def move_copy(q, v, a, step_m, dt, world):  # noqa: ANN001, ANN201
+    """Bound, move and stop one copy's robots (tether.envs.plant.move); returns blocked."""
+    has_grid, free, shape, origin, to_cells, field, has_bounds, bounds, res = world
+    n, dim = q.shape
+    blocked = 0
+    start = np.empty(dim)
+    disp = np.empty(dim)
+    end = np.empty(dim)
+    for i in range(n):
+        s = 0.0
+        for c in range(dim):
+            s += a[i, c] * a[i, c]
+        norm = math.sqrt(s)
+        long = norm > 1.0 + 1e-9
+        moving = False
+        for c in range(dim):
+            start[c] = q[i, c]
+            disp[c] = (a[i, c] / norm if long else a[i, c]) * step_m
+            moving = moving or disp[c] != 0.0
+        hit = False
+        if moving and (has_grid or has_bounds):
+            ok = False
+            for _ in range(12):
+                for c in range(dim):
+                    end[c] = start[c] + disp[c]
+                if segment_clear(
+                    start, end, has_grid, free, shape, origin, to_cells, field
+                ) and point_free(end, has_grid, free, shape, origin, res, has_bounds, bounds):
+                    ok = True
+                    break
+                hit = True
+                for c in range(dim):
+                    disp[c] *= 0.5
+            if not ok:
+                for c in range(dim):
+                    disp[c] = 0.0
+        blocked += hit
+        for c in range(dim):
+            q[i, c] = start[c] + disp[c]
+            v[i, c] = (q[i, c] - start[c]) / dt
+    return blocked
+
+
+@njit(cache=True)
+def _find(parent, x):  # noqa: ANN001, ANN201
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+@njit(cache=True)
+def links_copy(q, range_m, body_m, world):  # noqa: ANN001, ANN201
+    """The sensed links of one copy, ``(m, 2)`` int64 (``tether.sensing.sensed_pairs``)."""
+    has_grid, free, shape, origin, to_cells, field = world[:6]
+    pairs = pairs_within_kernel(q, range_m)
+    keep = np.ones(len(pairs), np.bool_)
+    if has_grid:
+        for p in range(len(pairs)):
+            keep[p] = segment_clear(
+                q[pairs[p, 0]], q[pairs[p, 1]], has_grid, free, shape, origin, to_cells, field
+            )
+    if body_m > 0 and len(pairs):
+        hidden = occluded_kernel(q, pairs, body_m)
+        for p in range(len(pairs)):
+            keep[p] = keep[p] and not hidden[p]
+    return pairs[keep]
+
+
+@njit(cache=True)
+def graph_terms(q, pairs, range_m, collision_m, terms):  # noqa: ANN001, ANN201
+    """Connected, lambda2, bottleneck margin and close pairs of one copy into ``terms``."""
+    n, dim = q.shape
+    m = len(pairs)
+    length = np.empty(m)
+    for p in range(m):
+        s = 0.0
+        for c in range(dim):
+            d = q[pairs[p, 0], c] - q[pairs[p, 1], c]
+            s += d * d
+        length[p] = math.sqrt(s)
+    parent = np.arange(n)
+    comps = n
+    longest = 0.0
+    for p in np.argsort(length, kind="mergesort"):  # Kruskal: the bottleneck of a tree
+        a, b = _find(parent, pairs[p, 0]), _find(parent, pairs[p, 1])
+        if a != b:
+            parent[a] = b
+            comps -= 1
+            longest = length[p]
+    connected = comps <= 1
+    lam = 0.0
+    if connected and n >= 2:
+        lap = np.zeros((n, n))
+        for p in range(m):
+            i, j = pairs[p, 0], pairs[p, 1]
+            lap[i, j] -= 1.0
+            lap[j, i] -= 1.0
+            lap[i, i] += 1.0
+            lap[j, j] += 1.0
+        lam = max(np.linalg.eigvalsh(lap)[1], 0.0)
+    terms[CONNECTED] = 1.0 if connected else 0.0
+    terms[DISCONNECTED] = 0.0 if connected else 1.0
+    terms[LAMBDA2] = lam
+    if n <= 1:
+        terms[MARGIN] = 1.0
+    else:
+        terms[MARGIN] = max(1.0 - longest / range_m, 0.0) if connected else 0.0
+    close = 0
+    if collision_m > 0:
+        close = len(pairs_within_kernel(q, collision_m))
+    terms[COLLISIONS] = close
+
+
+@njit(cache=True)
+def step_all(active, q, v, a, steps, obs, terms, rewards, done, sizes, world, task, weights):  # noqa: ANN001, ANN201, PLR0913
+    """One step of every copy (module docstring); arrays are changed in place.
+
+    ``sizes`` = ``(step_m, dt_s, max_speed_mps, range_m, body_m, collision_m, k_slots,
+    patch_cells, patch_res_m, max_steps)``; ``done[e]`` is 1 terminated, 2 truncated;
+    copies with ``active[e]`` false are left as they are.
+    """
+    step_m, dt, vmax, range_m, body_m, collision_m = sizes[:6]
+    max_steps = int(sizes[9])
+    n_copies = q.shape[0]
+    q_old = np.empty(q.shape[1:])
+    for e in range(n_copies):
+        if not active[e]:
+            continue
+        q_old[:] = q[e]
+        blocked = move_copy(q[e], v[e], a[e], step_m, dt, world)
+        steps[e] += 1
+        pairs = links_copy(q[e], range_m, body_m, world)
+        terms[e, :] = 0.0
+        terms[e, BLOCKED] = blocked
+        graph_terms(q[e], pairs, range_m, collision_m, terms[e])
+        finished = task_copy(e, q_old, q[e], steps[e] * dt, task, terms[e])
+        observe_copy(e, q[e], v[e], pairs, steps[e] * dt, sizes, world, task, obs[e])
+        r = 0.0
+        for t in range(N_TERMS):
+            r += weights[t] * terms[e, t]
+        rewards[e] = r
+        done[e] = 1 if finished else (2 if steps[e] >= max_steps else 0)
+
+
+@njit(cache=True)
+def observe_some(copies, q, v, steps, obs, sizes, world, task):  # noqa: ANN001, ANN201
+    """The observations of the listed copies in their current state (after a reset)."""
+    for e in copies:
+        pairs = links_copy(q[e], sizes[3], sizes[4], world)
+        observe_copy(e, q[e], v[e], pairs, steps[e] * sizes[1], sizes, world, task, obs[e])
