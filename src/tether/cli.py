@@ -22,6 +22,7 @@ from tether.config import MAX_SEED, Scenario
 from tether.errors import TetherError, TetherWarning
 from tether.interrupts import Stopped, stop_on_signals
 from tether.terminal.help import flow, summary
+from tether.terminal.usage import usage_error_class, usage_line
 from tether.terminal.words import count
 
 app = typer.Typer(
@@ -421,29 +422,6 @@ def export_(
     export_command(run_dir, out_path, fmt=fmt, say=say)
 
 
-def _usage_error_class() -> type[Exception]:
-    """The click exception class behind typer's usage errors, found without importing click.
-
-    typer bundles its own copy of click (``typer._click``) in recent versions and
-    depends on ``click`` in older ones; ``typer.BadParameter`` is public in both,
-    and its bases include the ``ClickException`` every usage error derives from.
-    """
-    for cls in typer.BadParameter.__mro__:
-        if cls.__name__ == "ClickException":
-            return cls
-    return typer.BadParameter  # pragma: no cover (every typer so far has one)
-
-
-def _usage_line(exc: Exception) -> str:
-    """``error: <what> (see `tether <command> --help`)`` for a usage error."""
-    message = " ".join(str(exc.format_message()).split())  # type: ignore[attr-defined]
-    ctx = getattr(exc, "ctx", None)
-    command = getattr(ctx, "command_path", None) or "tether"
-    if not command.startswith("tether"):
-        command = "tether " + command.split(" ", 1)[-1] if " " in command else "tether"
-    return f"error: {message} (see `{command} --help`)"
-
-
 _python_showwarning = warnings.showwarning
 
 
@@ -485,8 +463,8 @@ def main(argv: list[str] | None = None) -> None:
         err.print(str(Stopped(signal.SIGINT)), highlight=False, markup=False)
         sys.exit(130)
     except Exception as exc:  # usage errors, and anything unexpected
-        if isinstance(exc, _usage_error_class()):
-            err.print(_usage_line(exc), highlight=False, markup=False, soft_wrap=True)
+        if isinstance(exc, usage_error_class()):
+            err.print(usage_line(exc), highlight=False, markup=False, soft_wrap=True)
             sys.exit(2)
         if type(exc).__name__ == "Abort":  # click's own Abort (Ctrl-C at a prompt)
             sys.exit(130)
