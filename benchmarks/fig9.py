@@ -69,8 +69,8 @@ def load_rows(out: Path, sizes: list[int], seeds: int | None) -> list[dict]:
 
 
 def failure(row: dict) -> str:
-    """Why a trial is not a success of the controller (empty if it is): every target
-    reached; the controller alone kept the weighted lambda2 above lambda2_min = 0 (no
+    """Why a trial is not a success of the mission (empty if it is): every target
+    reached, and the controller's success: the controller alone kept the weighted lambda2 above lambda2_min = 0 (no
     connectivity loss, collision or clearance breach) at every sub-step with the guard only
     watching; no collision between recorded steps; every robot within its speed bound."""
     why = []
@@ -165,7 +165,7 @@ def markdown(result: dict, sizes: list[int]) -> str:
     """The tables of docs/explanation/multi_target.md: medians against N, trends, completeness."""
     out = []
     for scene, entry in result["scenes"].items():
-        out += [f"**{scene}** ({entry['trials']} trials; a success of the controller -- every "
+        out += [f"**{scene}** ({entry['trials']} trials; a success of the mission -- every "
                 f"target, the weighted lambda2 above 0 at every sub-step with the guard only "
                 f"watching, no collision, every speed within its bound -- in "
                 f"{entry['trials'] - len(entry['failed_trials'])})", "",
