@@ -92,8 +92,8 @@ class ContinuousParams(_Strict):
         if isinstance(data, dict):
             if "safeguard" in data:
                 raise ValueError(
-                    "safeguard: the key is now guard: detect (count steps that leave the "
-                    "safe set, the default), enforce (veto them) or off"
+                    "safeguard: unknown key; the guard is set by guard: detect (count steps "
+                    "that leave the safe set, the default), enforce (veto them) or off"
                 )
             preset = data.get("preset", "outdoor")
             if isinstance(preset, str) and preset in TABLE2:
