@@ -31,3 +31,16 @@ def one_error_line(code: int, err: str, *needles: str, max_length: int | None = 
     for needle in needles:
         assert needle in lines[0], f"{needle!r} not in {lines[0]!r}"
     return lines[0]
+
+
+def listed(out: str) -> dict[str, list[str]]:
+    """``tether list``'s sections (``strategies``, ``scenes``, ...) and the names in each."""
+    sections: dict[str, list[str]] = {}
+    current = None
+    for line in out.splitlines():
+        if line and not line.startswith(" ") and line.rstrip().endswith(":"):
+            current = line.split(" (", 1)[0].rstrip(":").strip()
+            sections[current] = []
+        elif line.startswith("  ") and current is not None and line.strip():
+            sections[current].append(line.split()[0])
+    return sections

@@ -77,8 +77,3 @@ def ran(data: dict[str, Any], max_steps: int | None = None) -> Ran:
         recorder=recorder,
     )
     return Ran(b, result, recorder)
-
-
-def leader_circle(t_s: float) -> list[float]:
-    """A leader's path as a function of time (``trajectory.kind: function``)."""
-    return [10.0 * np.cos(0.05 * t_s), 10.0 * np.sin(0.05 * t_s)]

@@ -30,7 +30,6 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "tether.geometry",
             "tether.floats",
             "tether.config",
-            "tether.safe_yaml",
         ),
     ),
     ("world", ("tether.world",)),

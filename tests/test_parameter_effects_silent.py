@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import user_leader_paths  # noqa: F401  (loaded, so a scenario may name its function)
 from _parameter_runs import SILENT, changed, ran
 from _parameters import effect
 
@@ -73,7 +74,7 @@ def test_the_leader_follows_the_waypoints() -> None:
 
 @effect("silent:trajectory.function", "silent:trajectory.kind")
 def test_a_function_of_time_leads() -> None:
-    path = {"kind": "function", "function": "_parameter_runs:leader_circle"}
+    path = {"kind": "function", "function": "user_leader_paths:leader_circle"}
     pts = {"kind": "positions", "positions": [[10, 0], [4, 0], [10, 6], [4, 6]]}
     r = ran(changed(SILENT, team__n_robots=4, team__init=pts, strategy__params__trajectory=path), 5)
     leader = r.built.strategy.leader

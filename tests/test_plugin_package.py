@@ -23,6 +23,8 @@ from pathlib import Path
 
 import pytest
 
+from _cli import listed
+
 BACKEND = '''
 """A PEP 517 backend that zips the package as it is (no setuptools, no wheel)."""
 import base64, hashlib, zipfile
@@ -186,9 +188,9 @@ def plugin_venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_installed_plugins_are_listed(plugin_venv, tmp_path):
     done = _tether(plugin_venv, tmp_path, "list")
     assert done.returncode == 0, done.stderr
-    lines = {line.split(":", 1)[0].strip(): line for line in done.stdout.splitlines()}
-    assert "plugin_drift" in lines["strategies"]
-    assert "plugin_corridor" in lines["scenes"]
+    sections = listed(done.stdout)
+    assert "plugin_drift" in sections["strategies"]
+    assert "plugin_corridor" in sections["scenes"]
     ignored = [line for line in done.stdout.splitlines() if line.startswith("ignored plug-in")]
     assert len(ignored) == 1 and "'silent'" in ignored[0] and "tether_plugin_demo" in ignored[0]
 

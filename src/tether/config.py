@@ -69,20 +69,31 @@ class _Strict(BaseModel):
 class WorldConfig(_Strict):
     """The workspace: a registered scene (``free``, ``map``, ``town``, ...) and its parameters."""
 
-    scene: str = "free"
-    dim: Literal[2, 3] = 2
-    params: dict[str, Any] = Field(default_factory=dict)
+    scene: str = Field(default="free", description="registered scene name (`tether list`)")
+    dim: Literal[2, 3] = Field(default=2, description="dimension of the workspace")
+    params: dict[str, Any] = Field(
+        default_factory=dict, description="the scene's parameters (see the scene tables)"
+    )
 
 
 class SensingConfig(_Strict):
     """Sensing model (see :mod:`tether.sensing`)."""
 
-    range_m: float = Field(gt=0, le=MAX_LENGTH_M)
-    body_radius_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
-    occlusion: bool = True
-    radial_error_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
-    angular_error_deg: float = Field(default=0.0, ge=0, lt=90)
-    noise: Literal["none", "uniform", "bound"] = "uniform"
+    range_m: float = Field(gt=0, le=MAX_LENGTH_M, description="sensing range d_max")
+    body_radius_m: float = Field(
+        default=0.0, ge=0, le=MAX_LENGTH_M, description="robot body radius (bodies occlude)"
+    )
+    occlusion: bool = Field(default=True, description="robot bodies hide the robots behind them")
+    radial_error_m: float = Field(
+        default=0.0, ge=0, le=MAX_LENGTH_M, description="bound on the measured distance's error"
+    )
+    angular_error_deg: float = Field(
+        default=0.0, ge=0, lt=90, description="bound on the measured bearing's error"
+    )
+    noise: Literal["none", "uniform", "bound"] = Field(
+        default="uniform",
+        description="measurement errors: none, uniform within the bounds, or always at them",
+    )
 
     @model_validator(mode="after")
     def _radial_below_range(self) -> SensingConfig:
@@ -108,48 +119,77 @@ class InitConfig(_Strict):
     ``positions``: explicit ``(n, dim)`` list.
     """
 
-    kind: Literal["random_connected", "uniform", "grid", "positions"] = "random_connected"
-    spacing_m: float = Field(default=5.0, gt=0, le=MAX_LENGTH_M)
-    min_separation_m: float = Field(default=1.0, ge=0, le=MAX_LENGTH_M)
-    center: list[Coordinate] | None = None
-    extent_m: list[Annotated[float, Field(gt=0, le=MAX_LENGTH_M)]] | None = None
-    positions: list[list[Coordinate]] | None = None
+    kind: Literal["random_connected", "uniform", "grid", "positions"] = Field(
+        default="random_connected", description="how the team is placed"
+    )
+    spacing_m: float = Field(
+        default=5.0, gt=0, le=MAX_LENGTH_M, description="random_connected: link length; grid: pitch"
+    )
+    min_separation_m: float = Field(
+        default=1.0, ge=0, le=MAX_LENGTH_M, description="least distance between two robots"
+    )
+    center: list[Coordinate] | None = Field(
+        default=None,
+        description="centre of the placement (m; default: the world's centre, or the origin)",
+    )
+    extent_m: list[Annotated[float, Field(gt=0, le=MAX_LENGTH_M)]] | None = Field(
+        default=None, description="uniform: side lengths of the box"
+    )
+    positions: list[list[Coordinate]] | None = Field(
+        default=None, description="positions: one point (m) per robot"
+    )
 
 
 class TeamConfig(_Strict):
-    n_robots: int = Field(gt=0, le=MAX_ROBOTS)
-    init: InitConfig = Field(default_factory=InitConfig)
+    """The team: how many robots and where they start."""
+
+    n_robots: int = Field(gt=0, le=MAX_ROBOTS, description="number of robots")
+    init: InitConfig = Field(default_factory=InitConfig, description="initial placement")
 
 
 class SimConfig(_Strict):
-    dt_s: float = Field(default=1.0, gt=0, le=MAX_DT_S)
-    max_steps: int = Field(default=500, gt=0, le=MAX_STEPS)
-    collision_distance_m: float = Field(default=0.0, ge=0, le=MAX_LENGTH_M)
+    """The simulation clock."""
+
+    dt_s: float = Field(default=1.0, gt=0, le=MAX_DT_S, description="time step (control period)")
+    max_steps: int = Field(default=500, gt=0, le=MAX_STEPS, description="steps at most")
+    collision_distance_m: float = Field(
+        default=0.0, ge=0, le=MAX_LENGTH_M, description="robots closer than this collide"
+    )
 
 
 class OutputConfig(_Strict):
-    dir: str = "runs"
-    record_every: int = Field(default=1, gt=0, le=MAX_STEPS)
-    figures: bool = True
+    """What a run writes."""
+
+    dir: str = Field(default="runs", description="folder the run folder is made in")
+    record_every: int = Field(
+        default=1, gt=0, le=MAX_STEPS, description="keep positions and links every k-th step"
+    )
+    figures: bool = Field(default=True, description="draw the PNG figures")
 
 
 class StrategyConfig(_Strict):
-    name: str
-    params: dict[str, Any] = Field(default_factory=dict)
+    """The strategy by name and its parameters."""
+
+    name: str = Field(description="registered strategy name (`tether list`)")
+    params: dict[str, Any] = Field(
+        default_factory=dict, description="the strategy's parameters (see its table)"
+    )
 
 
 class Scenario(_Strict):
     """A complete, validated scenario."""
 
-    name: str = Field(default="scenario", min_length=1, max_length=100)
-    description: str = ""
-    seed: int = Field(default=0, ge=0, le=MAX_SEED)
-    world: WorldConfig = Field(default_factory=WorldConfig)
-    team: TeamConfig
-    sensing: SensingConfig
-    sim: SimConfig = Field(default_factory=SimConfig)
-    strategy: StrategyConfig
-    output: OutputConfig = Field(default_factory=OutputConfig)
+    name: str = Field(
+        default="scenario", min_length=1, max_length=100, description="names the run folder"
+    )
+    description: str = Field(default="", description="free text for the reader")
+    seed: int = Field(default=0, ge=0, le=MAX_SEED, description="seed of every random draw")
+    world: WorldConfig = Field(default_factory=WorldConfig, description="the workspace")
+    team: TeamConfig = Field(description="the robots")
+    sensing: SensingConfig = Field(description="who senses whom")
+    sim: SimConfig = Field(default_factory=SimConfig, description="the simulation clock")
+    strategy: StrategyConfig = Field(description="the connectivity strategy")
+    output: OutputConfig = Field(default_factory=OutputConfig, description="what a run writes")
     sweep: dict[str, Any] = Field(
         default_factory=dict,
         description="axes (dotted scenario key -> values or range), zip groups and seeds, run by "

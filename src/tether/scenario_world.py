@@ -115,12 +115,11 @@ def scene_files(scenario: Scenario) -> tuple[dict[str, Any], list[SceneFile]]:
         if key not in params:
             continue
         given = _path_value(scenario, key, params[key])
-        resolved = scenario.resolve_path(given)
+        resolved, exists = _resolve(scenario, key, given)
         found = SceneFile(key, given, resolved)
-        exists = _usable(scenario, key, given, resolved)
         if not exists and key == "path" and stand_in is not None:
-            other = scenario.resolve_path(stand_in)
-            if not _usable(scenario, STAND_IN_KEY, stand_in, other):
+            other, other_exists = _resolve(scenario, STAND_IN_KEY, stand_in)
+            if not other_exists:
                 raise ScenarioError(
                     f"{src}: world.params.{STAND_IN_KEY}: {stand_in}: file not found beside "
                     f"the scenario ({scenario.base_dir}), and neither is world.params.path "
@@ -152,10 +151,12 @@ def _shown(path: str, limit: int = 80) -> str:
     return path if len(path) <= limit else path[: limit - 3] + "..."
 
 
-def _usable(scenario: Scenario, key: str, given: str, resolved: Path) -> bool:
-    """Whether the file exists; a path the file system cannot take is one clear error."""
+def _resolve(scenario: Scenario, key: str, given: str) -> tuple[Path, bool]:
+    """The file's path and whether it exists; a path the file system cannot take (too
+    long, a NUL byte) is one clear error."""
     try:
-        return resolved.exists()
+        resolved = scenario.resolve_path(given)
+        return resolved, resolved.exists()
     except (OSError, ValueError) as exc:  # a name too long, a NUL byte
         reason = getattr(exc, "strerror", None) or "not a usable path"
         raise ScenarioError(

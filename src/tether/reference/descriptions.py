@@ -9,6 +9,8 @@ already describes.
 from __future__ import annotations
 
 _CONNECTIVITY = "tether.continuous.strategy_params.ConnectivityStrategyParams"
+#: the parameters connectivity and multi_target share
+_CONTINUOUS = "tether.continuous.strategy_params.ContinuousParams"
 _ESTIMATOR = "tether.continuous.estimation.EstimatorParams"
 _ESTIMATOR_CONFIG = "tether.continuous.strategy_params.EstimatorConfig"
 _EXTERNAL = "tether.continuous.external.ExternalForce"
@@ -20,32 +22,32 @@ _GEN = "tether.continuous.targets"
 
 KEY_DESCRIPTIONS: dict[str, str] = {
     # the connectivity force (Table 2) and the robot model
-    f"{_CONNECTIVITY}.preset": "Table 2's column: outdoor (empty space, town), office, "
+    f"{_CONTINUOUS}.preset": "Table 2's column: outdoor (empty space, town), office, "
     "experiment (Sec. 4.2); sets the radii's defaults",
-    f"{_CONNECTIVITY}.rs_inner_m": "R's: the range factor starts falling from 1",
-    f"{_CONNECTIVITY}.rs_m": "Rs: the range factor reaches 0 (the link range)",
-    f"{_CONNECTIVITY}.ro_m": "Ro: the obstacle factor is 0 within this of an obstacle",
-    f"{_CONNECTIVITY}.ro_outer_m": "R'o: the obstacle factor reaches 1",
-    f"{_CONNECTIVITY}.rc_m": "Rc: the collision factor is 0 within this of another robot",
-    f"{_CONNECTIVITY}.rc_outer_m": "R'c: the collision factor reaches 1",
-    f"{_CONNECTIVITY}.lambda2_min": "lambda2 at which the potential is infinite",
-    f"{_CONNECTIVITY}.lambda2_null": "lambda2 above which the potential is zero",
-    f"{_CONNECTIVITY}.potential_gain_n": "k_V, the gain of the connectivity potential",
-    f"{_CONNECTIVITY}.mass_kg": "M, each robot's mass in eq. (1)",
-    f"{_CONNECTIVITY}.damping_ns_per_m": "b, the linear damping of eq. (1)",
-    f"{_CONNECTIVITY}.speed_damping_n": "beta, the damping that bounds the speed below "
+    f"{_CONTINUOUS}.rs_inner_m": "R's: the range factor starts falling from 1",
+    f"{_CONTINUOUS}.rs_m": "Rs: the range factor reaches 0 (the link range)",
+    f"{_CONTINUOUS}.ro_m": "Ro: the obstacle factor is 0 within this of an obstacle",
+    f"{_CONTINUOUS}.ro_outer_m": "R'o: the obstacle factor reaches 1",
+    f"{_CONTINUOUS}.rc_m": "Rc: the collision factor is 0 within this of another robot",
+    f"{_CONTINUOUS}.rc_outer_m": "R'c: the collision factor reaches 1",
+    f"{_CONTINUOUS}.lambda2_min": "lambda2 at which the potential is infinite",
+    f"{_CONTINUOUS}.lambda2_null": "lambda2 above which the potential is zero",
+    f"{_CONTINUOUS}.potential_gain_n": "k_V, the gain of the connectivity potential",
+    f"{_CONTINUOUS}.mass_kg": "M, each robot's mass in eq. (1)",
+    f"{_CONTINUOUS}.damping_ns_per_m": "b, the linear damping of eq. (1)",
+    f"{_CONTINUOUS}.speed_damping_n": "beta, the damping that bounds the speed below "
     "max_speed_mps",
-    f"{_CONNECTIVITY}.max_step_fraction": "a sub-step moves no robot more than this fraction "
+    f"{_CONTINUOUS}.max_step_fraction": "a sub-step moves no robot more than this fraction "
     "of the narrowest transition band",
-    f"{_CONNECTIVITY}.guard": "a step leaving the safe set: counted (detect), vetoed "
+    f"{_CONTINUOUS}.guard": "a step leaving the safe set: counted (detect), vetoed "
     "(enforce), or not checked (off)",
-    f"{_CONNECTIVITY}.keep_fraction": "enforce: a step keeps this fraction of the margin "
+    f"{_CONTINUOUS}.keep_fraction": "enforce: a step keeps this fraction of the margin "
     "lambda2 - lambda2_min",
-    f"{_CONNECTIVITY}.eigensolver": "lambda2 and the Fiedler vector: exact, or the "
+    f"{_CONTINUOUS}.eigensolver": "lambda2 and the Fiedler vector: exact, or the "
     "decentralized estimator",
-    f"{_CONNECTIVITY}.fiedler_method": "exact eigenpair: auto (certified small solver, LAPACK "
+    f"{_CONTINUOUS}.fiedler_method": "exact eigenpair: auto (certified small solver, LAPACK "
     "when it cannot certify) or lapack (LAPACK every sub-step)",
-    f"{_CONNECTIVITY}.estimator": "the decentralized estimator and its message layer",
+    f"{_CONTINUOUS}.estimator": "the decentralized estimator and its message layer",
     f"{_CONNECTIVITY}.external": "the external force f_i of eq. (1)",
     # the estimator of Yang et al. (2010)
     f"{_ESTIMATOR}.k1": "k1, gain of the deflation term (k1 > k3)",

@@ -210,8 +210,8 @@ def serve(
     host, real_port = server.server_address[:2]
     announce(f"serving {path} at http://{host}:{real_port}/ (127.0.0.1 only; Ctrl-C stops)")
     thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    try:
+    try:  # Ctrl-C may come as soon as the first request is answered, inside start()
+        thread.start()
         while thread.is_alive():
             thread.join(0.5)
     except KeyboardInterrupt:
@@ -220,5 +220,6 @@ def serve(
         if stop.signum != signal.SIGINT:
             raise
     finally:
-        server.shutdown()
+        if thread.is_alive():  # shutdown() waits for a serving loop: only if one runs
+            server.shutdown()
         server.server_close()
