@@ -70,9 +70,10 @@ def load_rows(out: Path, sizes: list[int], seeds: int | None) -> list[dict]:
 
 def failure(row: dict) -> str:
     """Why a trial is not a success of the mission (empty if it is): every target
-    reached, and the controller's success: the controller alone kept the weighted lambda2 above lambda2_min = 0 (no
-    connectivity loss, collision or clearance breach) at every sub-step with the guard only
-    watching; no collision between recorded steps; every robot within its speed bound."""
+    reached, and the controller's success: the controller alone kept the weighted lambda2
+    above lambda2_min = 0 (no connectivity loss, collision or clearance breach) at every
+    sub-step with the guard only watching; no collision between recorded steps; every
+    robot within its speed bound."""
     why = []
     if row["targets_reached"] != row["targets_total"]:
         why.append(f"{row['targets_reached']}/{row['targets_total']} targets "

@@ -35,8 +35,7 @@ KEY_DESCRIPTIONS: dict[str, str] = {
     f"{_CONTINUOUS}.potential_gain_n": "k_V, the gain of the connectivity potential",
     f"{_CONTINUOUS}.mass_kg": "M, each robot's mass in eq. (1)",
     f"{_CONTINUOUS}.damping_ns_per_m": "b, the linear damping of eq. (1)",
-    f"{_CONTINUOUS}.speed_damping_n": "beta, the damping that bounds the speed below "
-    "max_speed_mps",
+    f"{_CONTINUOUS}.speed_damping_n": "beta, the damping that bounds the speed below max_speed_mps",
     f"{_CONTINUOUS}.max_step_fraction": "a sub-step moves no robot more than this fraction "
     "of the narrowest transition band",
     f"{_CONTINUOUS}.guard": "a step leaving the safe set: counted (detect), vetoed "
