@@ -2,7 +2,7 @@
 
 Runs the same trials (scene x team size x configuration, as in
 ``scenarios/paper/continuous_fig9_<scene>.yaml``) under this tree and under
-``--old-root`` (another checkout, e.g. the commit before a change of the dynamics), in
+``--peer-root`` (another checkout, e.g. the commit before a change of the dynamics), in
 two processes at once, one per core, each with its own ``PYTHONPATH``: both meet the same
 load from the rest of the machine, and each trial is timed by its process's CPU clock
 (``time.process_time``) around the simulation alone (no start-up, no compile: every
@@ -10,8 +10,8 @@ kernel is loaded by a warm-up trial first). Writes ``benchmarks/results/fig9_tri
 per tree and trial the processor time, simulated time, sub-steps and the controller's
 metrics, and per tree the totals and the ratio of simulated to processor time.
 
-    python benchmarks/bench_fig9_trials.py --old-root ../old            # 3 scenes x 6 N x 3
-    python benchmarks/bench_fig9_trials.py --old-root ../old --seeds 0 1 --sizes 35
+    python benchmarks/bench_fig9_trials.py --peer-root ../old            # 3 scenes x 6 N x 3
+    python benchmarks/bench_fig9_trials.py --peer-root ../old --seeds 0 1 --sizes 35
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def worker(root: Path, scenes: list[str], sizes: list[int], seeds: list[int]) ->
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--old-root", type=Path, required=True)
+    ap.add_argument("--peer-root", type=Path, required=True)
     ap.add_argument("--scenes", nargs="+", default=["empty", "town", "office"])
     ap.add_argument("--sizes", nargs="+", type=int, default=[10, 15, 20, 25, 30, 35])
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
@@ -88,10 +88,10 @@ def main() -> None:
         return
     args = ["--scenes", *a.scenes, "--sizes", *map(str, a.sizes), "--seeds", *map(str, a.seeds)]
     procs = {}
-    for name, root in (("new", ROOT), ("old", a.old_root.resolve())):
+    for name, root in (("new", ROOT), ("old", a.peer_root.resolve())):
         env = {**os.environ, "PYTHONPATH": str(root / "src"), "TETHER_JIT": "1",
                "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}  # fmt: skip
-        procs[name] = subprocess.Popen([sys.executable, __file__, "--old-root", str(root),
+        procs[name] = subprocess.Popen([sys.executable, __file__, "--peer-root", str(root),
                                         "--worker", str(root), *args], env=env,
                                        stdout=subprocess.PIPE, text=True)  # fmt: skip
     rows = {name: [json.loads(line) for line in p.stdout] for name, p in procs.items()}
