@@ -123,7 +123,10 @@ def test_random_missions_match_brute_force(seed: int) -> None:
     got = mission_metrics(log, dt_s)
     want = brute_force(log, sensed_steps, base_steps, dt_s)
     for key, value in want.items():
-        assert got[key] == pytest.approx(value, abs=1e-9) if value is not None else got[key] is None, key
+        if value is None:
+            assert got[key] is None, key
+        else:
+            assert got[key] == pytest.approx(value, abs=1e-9), key
 
 
 def test_steps_out_of_order_refused() -> None:

@@ -120,7 +120,11 @@ class LeaderFollowerPolicy:
         nodes = [
             nd
             for nd in frontier_nodes(
-                self.own, sim.occupied, coarse, allowed, cfg.min_cluster_cells,
+                self.own,
+                sim.occupied,
+                coarse,
+                allowed,
+                cfg.min_cluster_cells,
                 cfg.max_cluster_extent,
             )  # fmt: skip
             if nd >= 0
@@ -200,10 +204,12 @@ class LeaderFollowerPolicy:
             self.blocked_steps += 1
         for r in np.flatnonzero(np.linalg.norm(steps, axis=1) > 1e-9).tolist():
             target = pos[r] + steps[r]
-            kind = GoalKind.RELAY
-            if r == self.leader and self.goal_kind == GoalKind.FRONTIER:
-                if np.linalg.norm(target - self.path[-1]) < 1e-6:
-                    kind = GoalKind.FRONTIER  # a full scan on arrival
+            at_frontier = (
+                r == self.leader
+                and self.goal_kind == GoalKind.FRONTIER
+                and np.linalg.norm(target - self.path[-1]) < 1e-6
+            )
+            kind = GoalKind.FRONTIER if at_frontier else GoalKind.RELAY  # a scan on arrival
             sim.assign(r, target, kind, target[None])
 
 

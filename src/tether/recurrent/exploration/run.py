@@ -183,7 +183,6 @@ class ExplorationRun(Strategy):
             "resolution_m": self.grid.resolution_m,
         }
 
-
     def _mission_summary(self) -> dict[str, Any]:
         """The shared mission metrics, the coverage goal and why the run stopped."""
         out = mission_metrics(self.log, self.dt_s)
