@@ -38,6 +38,7 @@ EXPECTED = {
     "recurrent_fig5_6_utility.yaml",
     "recurrent_relay_binding.yaml",
     "continuous_fig9.yaml",
+    "mission.yaml",
 }
 #: what the trials compute (name and description only label them)
 _LABELS = ("name", "description", "sweep", "seed")
