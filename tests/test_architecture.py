@@ -44,11 +44,19 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "tether.targets_recorded",
             "tether.team",
             "tether.viz",
+            "tether.mission.log",
+            "tether.mission.metrics",
         ),
     ),
-    ("strategies", ("tether.silent", "tether.continuous", "tether.recurrent")),
+    (
+        "strategies",
+        ("tether.silent", "tether.continuous", "tether.recurrent", "tether.mission"),
+    ),
     ("running", ("tether.runner", "tether.plugins", "tether.scenario_world")),
-    ("experiments", ("tether.experiments", "tether.recurrent.report")),
+    (
+        "experiments",
+        ("tether.experiments", "tether.recurrent.report", "tether.mission.report"),
+    ),
     (
         "interfaces",
         (

@@ -95,7 +95,9 @@ print("after the run:", imported())
 """
     out = _python(code, str(tmp_path / "run"))
     assert "after import: []" in out
-    assert "names: ['connectivity', 'multi_target', 'recurrent', 'silent', 'utility'] True" in out
+    names = "['connectivity', 'multi_target', 'recurrent', 'silent', 'silent_exploration', "
+    names += "'unconstrained', 'utility']"
+    assert f"names: {names} True" in out
     assert "after the run: ['tether.recurrent']" in out
 
 

@@ -39,6 +39,7 @@ EXPECTED = {
     "recurrent_relay_binding.yaml",
     "continuous_fig9.yaml",
     "continuous_estimator.yaml",  # multi_target on the decentralized estimator (App. A)
+    "mission.yaml",
 }
 #: what the trials compute (name and description only label them)
 _LABELS = ("name", "description", "sweep", "seed")

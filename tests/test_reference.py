@@ -44,6 +44,8 @@ RUNS = {
     "multi_target": "multi_target_office",
     "recurrent": "recurrent_demo",
     "utility": "recurrent_utility",
+    "unconstrained": "mission_unconstrained",
+    "silent_exploration": "mission_silent",
 }
 
 

@@ -44,6 +44,8 @@ BUILTINS: dict[Registry, dict[str, str]] = {
         "multi_target": "tether.continuous.multi_target",
         "recurrent": "tether.recurrent.strategy",
         "utility": "tether.recurrent.strategy",
+        "unconstrained": "tether.mission.unconstrained",
+        "silent_exploration": "tether.mission.silent_exploration",
     },
     SCENES: {
         "free": "tether.world.scenes",

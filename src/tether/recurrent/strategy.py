@@ -47,6 +47,8 @@ from tether.world.world import World
 
 __all__ = [
     "FailureParams",
+    "ExplorationParams",
+    "ExplorationPlugin",
     "RecurrentExploration",
     "RecurrentParams",
     "SignalParams",
@@ -113,6 +115,13 @@ class ExplorationParams(BaseModel):
     signal: SignalParams = Field(default_factory=SignalParams, description="link_model: signal")
     failures: FailureParams = Field(
         default_factory=FailureParams, description="robots that fail during the run"
+    )
+    coverage_goal: float | None = Field(
+        default=None,
+        gt=0,
+        le=1,
+        description="end the run once the base station knows this share of the reachable "
+        "area (null: run sim.max_steps)",
     )
 
 
@@ -199,6 +208,7 @@ def _config(
         link_params=_link_params(params, cells, diagonal),
         coarse_factor=factor,
         scan_steps=params.scan_steps,
+        coverage_goal=params.coverage_goal,
     )
 
 
@@ -265,7 +275,7 @@ def failure_schedule(
     return out
 
 
-class _ExplorationPlugin(ExplorationRun):
+class ExplorationPlugin(ExplorationRun):
     """Shared construction of the registered exploration strategies from a scenario."""
 
     Params: ClassVar[type[ExplorationParams]] = ExplorationParams
@@ -323,7 +333,7 @@ class _ExplorationPlugin(ExplorationRun):
         world: World,
         initial: TeamState,
         rng: np.random.Generator,
-    ) -> _ExplorationPlugin:
+    ) -> ExplorationPlugin:
         grid = cls._grid(scenario, world)
         cfg = _config(params, scenario, grid.resolution_m, grid.shape)
         try:
@@ -365,7 +375,7 @@ class _ExplorationPlugin(ExplorationRun):
 
 
 @STRATEGIES.register("recurrent")
-class RecurrentExploration(_ExplorationPlugin):
+class RecurrentExploration(ExplorationPlugin):
     """Asynchronous exploration under recurrent connectivity (Banfi et al. 2016)."""
 
     name = "recurrent"
@@ -386,7 +396,7 @@ class RecurrentExploration(_ExplorationPlugin):
 
 
 @STRATEGIES.register("utility")
-class UtilityExploration(_ExplorationPlugin):
+class UtilityExploration(ExplorationPlugin):
     """The Utility baseline (de Hoog et al.) the paper compares with."""
 
     name = "utility"

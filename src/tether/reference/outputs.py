@@ -97,7 +97,7 @@ class Event:
 
 _TARGET = "the target's id"
 _CONT = ("multi_target",)
-_EXPL = ("recurrent", "utility")
+_EXPL = ("recurrent", "utility", "unconstrained", "silent_exploration")
 
 #: every kind of event a built-in strategy writes, with its own columns
 EVENTS: dict[str, Event] = {
@@ -180,5 +180,9 @@ EVENTS: dict[str, Event] = {
         {"preempted": "the robots stopped", "homing": "those sent back to the base station"},
     ),
     "failure": Event("a robot failed", _EXPL, {}),
-    "return": Event("a robot headed back to the base station", ("utility",), {}),
+    "return": Event(
+        "a robot headed back to the base station",
+        ("utility", "unconstrained", "silent_exploration"),
+        {},
+    ),
 }

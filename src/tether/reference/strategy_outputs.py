@@ -156,9 +156,15 @@ _EXPLORATION = StrategyOutputs(
         "base_m": Output("the base station's position"),
         "map_cells": Output("cells of the map along each axis"),
         "resolution_m": Output("the map's cell size"),
+        "mission": Output(
+            "the mission metrics shared by every paradigm (tether.mission.metrics): time to "
+            "50/90/99 %, path length, coverage spread, overlap, time linked to the base "
+            "station, information latency, the coverage goal and why the run stopped"
+        ),
     },
     steps={
         "explored_fraction": Output("fraction of the reachable free space known at the station"),
+        "team_explored_fraction": Output("fraction of it some robot has sensed"),
         "n_connected": Output("robots linked to the base station"),
     },
     robots={
@@ -202,6 +208,20 @@ UTILITY = StrategyOutputs(
     robots=_EXPLORATION.robots,
 )
 
+UNCONSTRAINED = UTILITY
+
+SILENT_EXPLORATION = StrategyOutputs(
+    summary={
+        **_EXPLORATION.summary,
+        "leader": Output("the exploring robot"),
+        "frontiers_chosen": Output("frontiers the leader headed for"),
+        "leader_blocked_steps": Output("steps the steering law held the leader back"),
+        "leader_returned": Output("the leader had no frontier left and headed home"),
+    },
+    steps=_EXPLORATION.steps,
+    robots=_EXPLORATION.robots,
+)
+
 #: strategy name -> what it adds to the run folder
 STRATEGY_OUTPUTS: dict[str, StrategyOutputs] = {
     "silent": SILENT,
@@ -209,4 +229,6 @@ STRATEGY_OUTPUTS: dict[str, StrategyOutputs] = {
     "multi_target": MULTI_TARGET,
     "recurrent": RECURRENT,
     "utility": UTILITY,
+    "unconstrained": UNCONSTRAINED,
+    "silent_exploration": SILENT_EXPLORATION,
 }

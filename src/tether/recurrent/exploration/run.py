@@ -20,6 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from tether.graph import components
+from tether.mission.log import MissionLog
+from tether.mission.metrics import mission_metrics
 from tether.record import TrajectoryRecorder
 from tether.recurrent.exploration.metrics import MissionMetrics, classify
 from tether.recurrent.exploration.sim import (
@@ -89,7 +92,30 @@ class ExplorationRun(Strategy):
         self.mission = MissionMetrics(self.sim.n, self.sim.explored_fraction())
         self.states = classify(*(np.zeros(self.sim.n, bool),) * 3, self.sim.alive)
         self.dt_s = 1.0
+        self.log = MissionLog(self.sim.free_region, self.sim.n)
+        self._log_step(0)
         self._drain_sim_events()
+
+    def _log_step(self, step: int) -> None:
+        """Feed the mission log: what was sensed, the BS map, positions, links."""
+        sim = self.sim
+        pairs = np.asarray(sim.links, dtype=np.intp).reshape(-1, 2)
+        robots = pairs[(pairs > 0).all(axis=1)] - 1  # links between robots (node 0: BS)
+        count, _ = components(sim.n, robots)
+        self.log.record(
+            step,
+            sim.sensed,
+            sim.knowledge.global_known,
+            self.to_m(sim.pos),
+            sim.connected,
+            count <= 1,
+            base_version=sim.knowledge.global_version,
+        )
+
+    def done(self) -> bool:
+        """The coverage goal (``config.coverage_goal``) is known at the base station."""
+        goal = self.cfg.coverage_goal
+        return goal is not None and self.log.base_explored[-1] >= goal - 1e-12
 
     def step(self, ctx: StepContext) -> TeamState:
         self._step = ctx.step + 1
@@ -105,6 +131,7 @@ class ExplorationRun(Strategy):
             sim.alive,
         )
         self.mission.add(sim.explored_fraction(), self.states, sim.connected)
+        self._log_step(self._step)
         self._drain_sim_events()
         return TeamState(self.to_m(sim.pos), np.zeros_like(sim.pos), ctx.state.fixed)
 
@@ -128,6 +155,7 @@ class ExplorationRun(Strategy):
     def step_values(self) -> dict[str, Any]:
         return {
             "explored_fraction": self.sim.explored_fraction(),
+            "team_explored_fraction": self.log.team_explored[-1],
             "n_connected": int(self.sim.connected.sum()),
         }
 
@@ -148,11 +176,24 @@ class ExplorationRun(Strategy):
                 for r in np.flatnonzero(~self.sim.alive)
             ],
             **self.policy.metrics(),
+            "mission": self._mission_summary(),
             "timing_s": dict(self.sim.timing),
             "base_m": self.to_m(self.sim.base).tolist(),
             "map_cells": list(self.grid.occupied.shape),
             "resolution_m": self.grid.resolution_m,
         }
+
+    def _mission_summary(self) -> dict[str, Any]:
+        """The shared mission metrics, the coverage goal and why the run stopped."""
+        out = mission_metrics(self.log, self.dt_s)
+        goal = self.cfg.coverage_goal
+        reached = self.done()
+        grew = np.flatnonzero(np.diff(np.r_[0.0, self.log.base_explored]) > 0)
+        out["coverage_goal"] = goal
+        out["coverage_goal_reached"] = bool(reached)
+        out["stop_reason"] = "coverage goal" if reached else "time limit"
+        out["base_idle_at_end_s"] = (self.log.steps - int(grew[-1])) * self.dt_s
+        return out
 
 
 @dataclass

@@ -82,6 +82,7 @@ class ExplorationConfig:
     max_cluster_extent: int = 30
     scan_steps: int = 1  # steps a full rotation takes
     failures: dict[int, int] = field(default_factory=dict)  # robot -> step it fails at
+    coverage_goal: float | None = None  # stop once the BS knows this share of the area
 
 
 class ExplorationPolicy(Protocol):
@@ -196,9 +197,12 @@ class ExplorationSim:
         self.t = 0
         self.events: list[dict[str, Any]] = []
         self.timing = {"move": 0.0, "sense": 0.0, "comm": 0.0, "strategy": 0.0}
+        # the cells each robot sensed in the last step (robot, flat indices), for metrics
+        self.sensed: list[tuple[int, np.ndarray]] = []
         # initial full scans at the start positions, shared with the BS
         for r, cells in enumerate(self.sensor.scan(self.occupied, self.pos, self.heading, True)):
             self.knowledge.observe(r, cells)
+            self.sensed.append((r, cells))
         self._communicate()
 
     # ------------------------------------------------------------------ commands
@@ -317,6 +321,7 @@ class ExplorationSim:
         seen = self.sensor.scan(self.occupied, self.pos[who], self.heading[who], full)
         for r, cells in zip(who, seen, strict=True):
             self.knowledge.observe(int(r), cells)
+            self.sensed.append((int(r), cells))
         self.scan_left[scanning] -= 1
         done = scanning & (self.scan_left == 0)
         self.scanned[done] = True
@@ -355,6 +360,7 @@ class ExplorationSim:
     def step(self) -> None:
         """Advance by one step: move, sense, communicate, then the policy decides."""
         self.t += 1
+        self.sensed = []
         for r, step in self.cfg.failures.items():
             if step == self.t:
                 self.fail(int(r))

@@ -1,0 +1,1 @@
+"""One exploration mission under every connectivity paradigm, measured side by side."""
