@@ -1,5 +1,6 @@
-"""Every parameter of the exploration strategies (``recurrent``, ``utility``) changes a run
-the way its documentation says, set from a scenario (YAML keys, not the classes)."""
+"""Every parameter of the exploration strategies (``recurrent``, ``utility`` and the
+mission's ``unconstrained`` and ``silent_exploration``) changes a run the way its
+documentation says, set from a scenario (YAML keys, not the classes)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ import pytest
 from PIL import Image
 
 from _parameter_runs import Ran, changed, ran
-from _parameters import effect
+from _parameters import NO_EFFECT, effect
+from tether.errors import ScenarioError
 
 #: a 12 x 16 m procedural office at 0.1 m per cell, four robots from a corner
 EXPLORE = {
@@ -24,12 +26,25 @@ EXPLORE = {
     "strategy": {"name": "recurrent", "params": {"base_m": [2.0, 2.0], "comm_range_m": 6.0}},
     "output": {"figures": False},
 }  # fmt: skip
-BOTH = pytest.mark.parametrize("name", ["recurrent", "utility"])
+#: the strategies on the exploration simulator; they share its parameters
+EXPLORERS = ("recurrent", "utility", "unconstrained", "silent_exploration")
+BOTH = pytest.mark.parametrize("name", EXPLORERS)
+
+
+def for_strategy(name: str, **changes: object) -> dict:
+    """EXPLORE run by strategy ``name`` (silent_exploration: d0 below the link range)."""
+    data = changed(EXPLORE, strategy__name=name, **changes)
+    if name == "silent_exploration":
+        params = data["strategy"]["params"]
+        params["d0_m"] = 0.6 * float(params.get("comm_range_m", 6.0))
+    return data
 
 
 def explore(name: str, steps: int | None = None, **params: object) -> Ran:
-    data = changed(EXPLORE, strategy__name=name)
+    data = for_strategy(name)
     data["strategy"]["params"].update(params)
+    if name == "silent_exploration" and "d0_m" not in params:
+        data["strategy"]["params"]["d0_m"] = 0.6 * float(data["strategy"]["params"]["comm_range_m"])
     return ran(data, max_steps=steps)
 
 
@@ -43,7 +58,7 @@ def travel(r: Ran) -> np.ndarray:
 
 
 def shared(*keys: str) -> list[str]:
-    return [f"{s}:{k}" for s in ("recurrent", "utility") for k in keys]
+    return [f"{s}:{k}" for s in EXPLORERS for k in keys]
 
 
 @BOTH
@@ -67,13 +82,19 @@ def test_a_wider_or_finer_scan_sees_more(name: str) -> None:
     assert explored(fine)[0] > 1.2 * explored(coarse)[0]  # the first, full-circle scan
 
 
-@BOTH
-@effect(*shared("scan_steps"))
+@pytest.mark.parametrize("name", [s for s in EXPLORERS if s != "silent_exploration"])
+@effect(*[f"{s}:scan_steps" for s in EXPLORERS if s != "silent_exploration"])
 def test_slower_scans_hold_the_robots(name: str) -> None:
     def standing(r: Ran) -> int:  # robot-steps without a move
         return int((np.linalg.norm(np.diff(r.positions, axis=0), axis=2)[1:] == 0).sum())
 
     assert standing(explore(name, scan_steps=8)) > standing(explore(name)) + 10
+
+
+def test_silent_exploration_refuses_scans() -> None:
+    """Its robots move by the steering law and never stop at a frontier goal to scan."""
+    with pytest.raises(ScenarioError, match="scan_steps"):
+        explore("silent_exploration", 1, scan_steps=8)
 
 
 @BOTH
@@ -131,9 +152,26 @@ def signal_reach_m(ref_power: float, ref_distance: float, exponent: float, cutof
     return ref_distance * 10 ** ((ref_power - cutoff) / (10 * exponent))
 
 
-@BOTH
-@effect(*shared("signal.ref_power_dbm", "signal.ref_distance_m", "signal.exponent",
-                "signal.cutoff_dbm", "signal.wall_loss_db"))  # fmt: skip
+SIGNAL_KEYS = ("signal.ref_power_dbm", "signal.ref_distance_m", "signal.exponent",
+               "signal.cutoff_dbm", "signal.wall_loss_db")  # fmt: skip
+NO_EFFECT["silent_exploration:scan_steps"] = (
+    "refused unless 1: the steering law never stops a robot at a frontier to scan "
+    "(test_silent_exploration_refuses_scans)"
+)
+NO_EFFECT.update({
+    f"silent_exploration:{k}": "the steering law needs a sensing range d_max: "
+    "link_model signal is refused (test_silent_exploration_refuses_the_signal_model)"
+    for k in SIGNAL_KEYS
+})  # fmt: skip
+
+
+def test_silent_exploration_refuses_the_signal_model() -> None:
+    with pytest.raises(ScenarioError, match="link_model: the steering law needs"):
+        explore("silent_exploration", 1, link_model="signal")
+
+
+@pytest.mark.parametrize("name", [s for s in EXPLORERS if s != "silent_exploration"])
+@effect(*[f"{s}:{k}" for s in EXPLORERS if s != "silent_exploration" for k in SIGNAL_KEYS])
 def test_signal_parameters_set_the_reach(name: str) -> None:
     base = {"ref_power_dbm": -40.0, "ref_distance_m": 1.0, "exponent": 2.5,
             "wall_loss_db": 3.0, "cutoff_dbm": -70.0}  # fmt: skip
@@ -152,7 +190,7 @@ def test_signal_parameters_set_the_reach(name: str) -> None:
 @BOTH
 @effect(*shared("failures.at_s"))
 def test_a_robot_fails_at_its_time(name: str) -> None:
-    data = changed(EXPLORE, strategy__name=name, sim__dt_s=2.0, sim__max_steps=12)
+    data = for_strategy(name, sim__dt_s=2.0, sim__max_steps=12)
     data["strategy"]["params"]["failures"] = {"at_s": {1: 12.0}}  # step 6 of 2 s
     r = ran(data)
     q = r.positions[:, 1]
@@ -165,7 +203,7 @@ def test_a_robot_fails_at_its_time(name: str) -> None:
 @effect(*shared("failures.random", "failures.window_s"))
 def test_random_failures_fall_in_their_window(name: str) -> None:
     for seed in range(3):
-        data = changed(EXPLORE, strategy__name=name, seed=seed, sim__max_steps=30)
+        data = for_strategy(name, seed=seed, sim__max_steps=30)
         data["strategy"]["params"]["failures"] = {"random": 2, "window_s": [5.0, 9.0]}
         failed = ran(data).metrics["failures"]
         assert len(failed) == 2
@@ -267,18 +305,69 @@ def corridor_map(tmp_path: Path) -> str:
     return str(path)
 
 
-@effect("utility:coordination")
-def test_coordination_from_yaml_decides_who_takes_the_one_frontier(tmp_path: Path) -> None:
+@pytest.mark.parametrize("name", ["utility", "unconstrained"])
+@effect("utility:coordination", "unconstrained:coordination")
+def test_coordination_from_yaml_decides_who_takes_the_one_frontier(
+    tmp_path: Path, name: str
+) -> None:
     from tether.recurrent.exploration.sim import GoalKind
 
     world = {"scene": "map", "dim": 2, "params": {"path": corridor_map(tmp_path),
                                                    "resolution_m": 0.1}}  # fmt: skip
     goals = {}
     for mode in ("greedy", "none"):
-        data = changed(EXPLORE, strategy__name="utility", world=world, team__n_robots=3,
+        data = changed(EXPLORE, strategy__name=name, world=world, team__n_robots=3,
                        strategy__params={"coordination": mode, "base_m": [0.6, 1.5]})  # fmt: skip
         sim = ran(data, 1).built.strategy.sim
         goals[mode] = {tuple(g) for g in sim.goal[sim.goal_kind == GoalKind.FRONTIER].tolist()}
         assert (sim.goal_kind == GoalKind.FRONTIER).sum() >= 2
     assert len(goals["none"]) == 1  # every robot on its own: the best frontier for each
     assert len(goals["greedy"]) >= 2  # joint assignment: never two on one frontier goal
+
+
+@BOTH
+@effect(*shared("coverage_goal"))
+def test_the_coverage_goal_ends_the_run(name: str) -> None:
+    """Once the base station knows the goal's share of the area, the run stops."""
+    free = explore(name, 40)
+    done = explore(name, 40, coverage_goal=0.02)
+    known = explored(free)
+    assert known.max() >= 0.02  # the goal is reached within the free run's 40 steps
+    assert len(done.positions) < len(free.positions)
+    assert done.metrics["mission"]["coverage_goal_reached"] is True
+    assert explored(done)[-1] >= 0.02
+
+
+def leader_and_followers(**params: object) -> Ran:
+    return explore("silent_exploration", 30, **params)
+
+
+@effect("silent_exploration:leader")
+def test_the_leader_is_the_robot_that_explores() -> None:
+    for leader in (0, 2, 3):
+        r = leader_and_followers(leader=leader)
+        steps = np.linalg.norm(np.diff(r.positions, axis=0), axis=2)
+        moving = (steps > 0).sum(axis=0)  # the followers settle; the leader goes on
+        assert (
+            int(moving.argmax()) == leader and moving[leader] > 2 * np.delete(moving, leader).max()
+        )
+
+
+@effect("silent_exploration:d0_m", "silent_exploration:gamma")
+def test_d0_and_gamma_shape_the_followers_steps() -> None:
+    base = leader_and_followers()
+    for change in ({"d0_m": 2.0}, {"gamma": 0.05}):
+        other = leader_and_followers(**change)
+        followers = [i for i in range(4) if i != 0]
+        assert not np.allclose(travel(base)[followers], travel(other)[followers]), change
+    slow = leader_and_followers(gamma=0.02)
+    assert travel(slow)[1:].sum() < travel(base)[1:].sum()  # a smaller gain, shorter steps
+
+
+@effect("silent_exploration:min_separation_m")
+def test_min_separation_keeps_robots_apart() -> None:
+    for sep in (0.5, 2.0):
+        r = leader_and_followers(min_separation_m=sep)
+        q = r.positions[-1]
+        d = np.linalg.norm(q[:, None] - q[None], axis=-1)[np.triu_indices(len(q), 1)]
+        assert d.min() >= sep - 0.15  # a cell of rounding

@@ -254,6 +254,11 @@ class SilentExploration(ExplorationPlugin):
                 f"{src}.link_model: the steering law needs a sensing range d_max; use 'los' "
                 "or 'disk' (d_max = comm_range_m)"
             )
+        if params.scan_steps != 1:
+            raise ScenarioError(
+                f"{src}.scan_steps: {params.scan_steps}: the steering law never stops a robot "
+                "at a frontier to scan; remove scan_steps (or set it to 1)"
+            )
         if params.d0_m >= params.comm_range_m:
             raise ScenarioError(
                 f"{src}.d0_m: {params.d0_m:g} m is not below the link range comm_range_m = "
