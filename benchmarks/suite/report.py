@@ -103,6 +103,10 @@ def table_summary(doc: dict) -> str:
     """Every line of every row: goal, peer, ours, peer's, ratio, met, warm-up."""
     head = "| row | what | goal | ours | peer (same run) | peer's | ratio | met | warm-up |"
     out = [head, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for name, rec in doc["rows"].items():
+        if rec.get("skipped"):
+            out.append(f"| `{name}` | {rec['title']}: not measured ({rec['skipped']}) "
+                       "| - | - | - | - | - | - | - |")  # fmt: skip
     for name, ln in _lines(doc):
         met = {True: "yes", False: "**no**", None: "-"}[ln["met"]]
         worst = ln["extra"].get("worst_ratio")
