@@ -83,6 +83,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     out = args.out or report.RESULTS / f"{report.machine_name()}.json"
     if args.render:
+        doc = report.load(out)
+        doc["rows"] = {k: doc["rows"][k] for k in ROWS if k in doc["rows"]}
+        report.save(out, doc)
         for page in report.rewrite_pages(out):
             print(f"rewrote {page}")
         return 0

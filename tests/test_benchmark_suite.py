@@ -20,9 +20,9 @@ ROOT = Path(__file__).resolve().parents[1]
 RUN = ROOT / "benchmarks" / "run.py"
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+import suite.rows  # noqa: E402, F401  (registers the rows)
 from suite import report  # noqa: E402
 from suite.core import ROWS, Line  # noqa: E402
-import suite.rows  # noqa: E402, F401  (registers the rows)
 
 
 def run(*args: str) -> subprocess.CompletedProcess:

@@ -27,6 +27,7 @@ import numpy as np
 
 from suite.core import ROOT, Line, command, cpu_clock, row
 from suite.recurrent import run_process
+from suite.report import num, register_table
 
 
 @row("kernels_compile", "first use: numba compiles every kernel once", full_only=True)
@@ -175,3 +176,16 @@ def placement(quick: bool) -> dict:
         raise AssertionError("the placement is not a connected, separated team")
     return {"lines": [Line(f"random connected placement, {n:,} robots", "s", took,
                            goal="<= 30 s", goal_value=30.0)]}  # fmt: skip
+
+
+@register_table("sweep")
+def table_sweep(doc: dict) -> str:
+    out = ["| executor | trials | wall (s) | trials per minute | speed-up | same table |",
+           "| --- | ---: | ---: | ---: | ---: | --- |"]  # fmt: skip
+    per = doc["rows"].get("sweep", {}).get("details", {}).get("setups", [])
+    for p in per:
+        speed = p["trials_per_min"] / per[0]["trials_per_min"]
+        out.append(f"| {p['setup']} | {p['trials']} | {num(p['wall_s'])} | "
+                   f"{num(p['trials_per_min'])} | {num(speed)}x | "
+                   f"{'yes' if p['same_table'] else 'no'} |")  # fmt: skip
+    return "\n".join(out)
