@@ -128,7 +128,7 @@ def connectivity_step(quick: bool) -> dict:
                     + ("free 3-D" if wname == "free" else "town"),
                     unit,
                     rec["step_s"] * scale,
-                    goal=f"<= {num(shown)} {unit}",
+                    goal=f"<= {shown:g} {unit}",
                     goal_value=shown,
                     warmup_s=rec["first_s"],
                 )

@@ -91,12 +91,11 @@ def with_unit(value: float | None, unit: str) -> str:
     return f"{num(value)}x" if unit == "x" else f"{num(value)} {unit}"
 
 
-def _lines(doc: dict, names: list[str] | None = None) -> list[tuple[str, dict]]:
-    out = []
-    for name, rec in doc["rows"].items():
-        if names is None or name in names:
-            out += [(name, line) for line in rec["lines"]]
-    return out
+def seconds(value: float | None) -> str:
+    """A duration in s from 1 s up, else in ms; ``-`` for ``None``."""
+    if value is None:
+        return "-"
+    return f"{num(value)} s" if value >= 1 else f"{num(1e3 * value)} ms"
 
 
 def table_summary(doc: dict) -> str:
@@ -107,19 +106,18 @@ def table_summary(doc: dict) -> str:
         if rec.get("skipped"):
             out.append(f"| `{name}` | {rec['title']}: not measured ({rec['skipped']}) "
                        "| - | - | - | - | - | - | - |")  # fmt: skip
-    for name, ln in _lines(doc):
-        met = {True: "yes", False: "**no**", None: "-"}[ln["met"]]
-        worst = ln["extra"].get("worst_ratio")
-        ours = with_unit(ln["ours"], ln["unit"])
-        if worst is not None:
-            ours += f" (worst {num(worst)}x)"
-        peer_value = with_unit(ln["peer_value"], ln["unit"])
-        ratio = "-" if ln["ratio"] is None else f"{num(ln['ratio'])}x"
-        warm = "-" if ln["warmup_s"] is None else f"{num(ln['warmup_s'])} s"
-        out.append(
-            f"| `{name}` | {ln['label']} | {ln['goal']} | {ours} | {ln['peer']} | "
-            f"{peer_value} | {ratio} | {met} | {warm} |"
-        )
+        for ln in rec["lines"]:
+            met = {True: "yes", False: "**no**", None: "-"}[ln["met"]]
+            worst = ln["extra"].get("worst_ratio")
+            ours = with_unit(ln["ours"], ln["unit"])
+            if worst is not None:
+                ours += f" (worst {num(worst)}x)"
+            peer_value = with_unit(ln["peer_value"], ln["unit"])
+            ratio = "-" if ln["ratio"] is None else f"{num(ln['ratio'])}x"
+            out.append(
+                f"| `{name}` | {ln['label']} | {ln['goal']} | {ours} | {ln['peer']} | "
+                f"{peer_value} | {ratio} | {met} | {seconds(ln['warmup_s'])} |"
+            )
     return "\n".join(out)
 
 
