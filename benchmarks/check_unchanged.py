@@ -1,7 +1,7 @@
 """Fingerprint every built-in scenario's run, to show that a refactor changed nothing.
 
-    python benchmarks/check_unchanged.py save  benchmarks/results/unchanged_before.json
-    python benchmarks/check_unchanged.py check benchmarks/results/unchanged_before.json
+    python benchmarks/check_unchanged.py save  /tmp/fingerprints.json [SCENARIO ...]
+    python benchmarks/check_unchanged.py check /tmp/fingerprints.json [SCENARIO ...]
 
 ``save`` runs each built-in scenario with its own seed (no figures) and stores, per
 scenario, the summary (without wall-clock times and provenance), the SHA-256 of every
@@ -9,11 +9,14 @@ Parquet file and of every column of it, and the events as rows. ``check`` runs t
 again with the code on ``PYTHONPATH`` and compares: summary values present in both,
 every column present in both (a refactor may add columns), and whole files where the
 column sets are equal (byte-identical Parquet). Run it from the repository root (the
-real-map scenarios read ``../shared/maps``).
+real-map scenarios read ``../shared/maps``). ``save`` never overwrites a file; a missing
+file or an unknown scenario is a one-line error (exit code 2); ``check`` exits 1 when a
+run differs.
 """
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import json
 import sys
@@ -98,16 +101,35 @@ def compare(before: dict[str, Any], after: dict[str, Any]) -> list[str]:
     return problems
 
 
-def main() -> None:
-    mode, path = sys.argv[1], Path(sys.argv[2])
-    names = sys.argv[3:] or builtin_scenarios()
+def fail(message: str) -> None:
+    """One line on stderr, exit code 2 (bad input, never a traceback)."""
+    print(f"check_unchanged: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("mode", choices=["save", "check"])
+    ap.add_argument("path", type=Path, help="the fingerprints file (written by save)")
+    ap.add_argument("names", nargs="*", help="built-in scenarios (default: all)")
+    args = ap.parse_args(argv)
+    mode, path = args.mode, args.path
+    known = builtin_scenarios()
+    unknown = [n for n in args.names if n not in known]
+    if unknown:
+        fail(f"unknown built-in scenario(s) {', '.join(unknown)}; `tether list` names them")
+    names = args.names or known
     if mode == "save":
+        if path.exists():
+            fail(f"{path} exists; give a new file (save never overwrites)")
         result = {}
         for name in names:
             result[name] = fingerprint(name)
             print(f"{name}: {result[name]['wall_s']} s", flush=True)
         path.write_text(json.dumps(result, indent=1, default=str) + "\n")
         return
+    if not path.is_file():
+        fail(f"{path}: no such fingerprints file; make one with `save`")
     before = json.loads(path.read_text())
     bad = 0
     for name in names:

@@ -13,12 +13,14 @@ Usage::
 
     python benchmarks/diagnose_stall.py RUN_FOLDER --at-s 900
 
-(``docs/explanation/multi_target.md``, the Fig. 9 town failure N = 25 seed 11, uses ``--at-s 900``.)
+A folder that is not a ``multi_target`` run, or a time outside the run, is a one-line
+error (exit code 2). ``tests/test_diagnose_stall.py`` runs it on a short town run.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import networkx as nx
@@ -154,13 +156,31 @@ def report(world, strategy, state) -> None:  # noqa: ANN001
                 print(f"  without {i}-{j} (W {w[k]:.3f}): lambda2 {l2:.5f}")
 
 
-def main() -> None:
+def fail(message: str) -> None:
+    """One line on stderr, exit code 2 (bad input, never a traceback)."""
+    print(f"diagnose_stall: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run", type=Path, help="a run folder of a multi_target scenario")
     ap.add_argument("--at-s", type=float, required=True, help="simulated time to look at")
-    args = ap.parse_args()
-    dt = float(load_scenario(args.run / "scenario.yaml").sim.dt_s)
+    args = ap.parse_args(argv)
+    scenario = args.run / "scenario.yaml"
+    if not scenario.is_file() or not (args.run / "robots.parquet").is_file():
+        fail(f"{args.run}: not a run folder (no scenario.yaml and robots.parquet); "
+                 "give a folder that `tether run` wrote")  # fmt: skip
+    sc = load_scenario(scenario)
+    if sc.strategy.name != "multi_target":
+        fail(f"{args.run}: a {sc.strategy.name!r} run; this tool looks at multi_target runs")
+    dt = float(sc.sim.dt_s)
     steps = round(args.at_s / dt)
+    recorded = pq.read_table(args.run / "robots.parquet", columns=["step"]).column(0)
+    last = int(max(recorded.to_pylist(), default=0))
+    if not 0 <= steps <= last:
+        fail(f"--at-s {args.at_s:g}: the run covers 0 to {last * dt:g} s; choose a time "
+                 "in it")  # fmt: skip
     world, strategy, state = replay(args.run, steps)
     rec = recorded_positions(args.run, steps)
     if rec is not None:

@@ -1,7 +1,7 @@
 """The team placement ``random_connected`` as it was before it became O(n log n).
 
 Kept as the reference the new placement is tested against (the same properties,
-the same statistics) and timed against in ``benchmarks/bench_placement.py``:
+the same statistics):
 robots grown one at a time, each within ``spacing_m`` of a uniformly random
 earlier robot, at least ``min_separation_m`` from all others, in free space,
 with a clear line of sight to its anchor. Every candidate is checked against

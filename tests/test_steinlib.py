@@ -5,9 +5,9 @@ there) are read with :func:`tether.graph.steinlib.read_stp`. Instances with at m
 :data:`MAX_TERMINALS` terminals are solved by
 :func:`tether.recurrent.planning.steiner.steiner_tree` with the reference path and, if
 numba is installed, with the compiled kernel; Dreyfus-Wagner's ``3^k`` work makes the
-17-terminal ones take seconds even compiled (``benchmarks/bench_steinlib.py`` runs
-those). Every instance is also checked against networkx's 2-approximation, a check of
-the reader and of the optimum table rather than of the solver.
+17-terminal ones take seconds even compiled (the benchmark suite's ``steiner_scaling``
+row runs those). Every instance is also checked against networkx's 2-approximation, a
+check of the reader and of the optimum table rather than of the solver.
 """
 
 from __future__ import annotations
@@ -48,9 +48,9 @@ B = {
 }
 
 #: the exact solver runs on instances with at most this many terminals: b01, b02, b04,
-#: b05, b07, b10, under 0.1 s each compiled and 0.25 s with the reference path; the next
-#: size, 17 terminals, takes 3-5 s compiled and 15-17 s with the reference path
-#: (benchmarks/results/steinlib_b.json)
+#: b05, b07, b10, a fraction of a second each; the next size, 17 terminals, takes
+#: seconds compiled and more with the reference path (the steiner_scaling row of
+#: python benchmarks/run.py)
 MAX_TERMINALS = 13
 
 SOLVED = [name for name, (_, _, k, _) in B.items() if k <= MAX_TERMINALS]

@@ -148,11 +148,8 @@ def astar_grid(
     cells of one shortest path. Ties are broken deterministically: lowest
     ``f = g + h``, then lowest ``h`` (closest to the goal), then lowest flat index
     (C order), with neighbours scanned in :func:`neighbour_offsets` order.
-    Measured (``benchmarks/bench_paths.py``, ``benchmarks/results/paths.json``, 2-core
-    AMD EPYC under load ~2): 100 x 100 x 20 grids with box buildings (19 % occupied),
-    corner to corner median 178 ms (125-270 ms over runs), random pairs 73 ms; the
-    Euclidean heuristic 2-4x slower; a maze-like worst case (a wall with one hole, A*
-    closes all 1.6e5 free cells) about 1 s; unreachable goals 4-14 ms.
+    Its time, compiled and reference, on 100 x 100 x 20 grids with box buildings:
+    the ``paths`` row of ``python benchmarks/run.py`` (docs/explanation/paths.md).
     """
     free = np.asarray(free, dtype=bool)
     dim = free.ndim

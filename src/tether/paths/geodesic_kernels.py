@@ -21,8 +21,8 @@ Predecessors are scipy's where they do not depend on its heap: scipy keeps, for 
 one replaces it only if strictly better). Neighbours with a smaller label are scanned
 first by any queue, so that is the candidate with the smallest ``d(u)``; only when two
 candidates share it does the order of scipy's Fibonacci heap decide. Those nodes are
-flagged in ``tie`` (0.16 % of the nodes of the Cluttered map,
-``benchmarks/bench_geodesic.py``) and
+flagged in ``tie`` (a small fraction of the nodes of a map; ``tests/test_geodesic_kernel.py``
+checks the paths against scipy's) and
 :meth:`tether.paths.geodesic.Geodesics.path` asks scipy for the row of a source whose
 path crosses one.
 """

@@ -34,7 +34,7 @@ checking the subsets with one frontier fewer suffices). For ``delta >= 3`` the
 costs of all pairs, and a subset with a pair that does not fit the budget is
 infeasible for the same reason (the *pair filter*): genNewSubset does not make
 such subsets and the DP prunes them before the closed list (the same result with
-far fewer subsets, ``docs/performance.md``; the reference is ``pair_filter=False``).
+far fewer subsets; the reference is ``pair_filter=False``, and the tests compare them).
 The selection loop is Algorithm 1 itself: the utility test of Step 10, the budget
 test of Step 12; then completeConfiguration (Step 20). :class:`SharedSteiner` fills
 every table eagerly (all subsets of sizes ``< delta``) for tests and benchmarks.

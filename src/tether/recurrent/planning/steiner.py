@@ -90,8 +90,9 @@ def steiner_tree(
     The reference is Dreyfus-Wagner with ``O(3^k n + 2^k n^2 + n (m + n log n))`` time and
     ``O(2^k n)`` memory for ``k`` terminals, ``n`` vertices, ``m`` edges: on the
     SteinLib B instances (50-100 vertices) the compiled variant takes milliseconds for
-    up to 13 terminals and 4-5 s for 19 (``benchmarks/bench_steinlib.py``); each
-    terminal more triples the work. Optimality is exact (integer or float weights).
+    up to 13 terminals and seconds for 19 (the ``steiner_scaling`` row of
+    ``python benchmarks/run.py``); each terminal more triples the work. Optimality is
+    exact (integer or float weights).
     """
     if graph.is_directed():
         raise ValueError("steiner_tree needs an undirected graph")
