@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from pettingzoo.test import parallel_api_test, parallel_seed_test
+from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test, seed_test
 
 import tether.envs as te
 from tether.runner import build
@@ -40,8 +40,18 @@ def test_pettingzoo_parallel_api_and_seed(kind: str) -> None:
         parallel_seed_test(lambda: te.parallel_env(name), num_cycles=12)
 
 
-def test_gymnasium_env_checker_passes_for_the_team_form() -> None:
-    env = te.team_env("silent_demo", max_neighbours=3)
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_pettingzoo_aec_api_and_seed(kind: str) -> None:
+    name = KINDS[kind]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        api_test(te.env(name), num_cycles=12)
+        seed_test(lambda: te.env(name), num_cycles=12)
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_gymnasium_env_checker_passes_for_the_team_form(kind: str) -> None:
+    env = te.team_env(KINDS[kind], max_neighbours=3)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_env(env, skip_render_check=True)
