@@ -58,6 +58,8 @@ from tether.config import load_scenario
 from tether.runfolder import machine
 
 ROOT = Path(__file__).resolve().parents[1]
+#: index of the ``connected`` term in ``infos["terms"]`` (tether.envs.options.TERMS)
+CONNECTED = 2
 #: steps of one episode, on every side
 EPISODE_STEPS = 300
 #: an environment's own step limit, beyond any episode of the loop (which resets every episode)
@@ -86,6 +88,10 @@ class Side:
 
     def step(self) -> None: ...
 
+    def stats(self) -> dict[str, Any]:
+        """Side-specific numbers of the timed rounds."""
+        return {}
+
 
 class Tether(Side):
     name = "tether"
@@ -99,13 +105,36 @@ class Tether(Side):
         self.env = te.vector_env(data, self.envs)
         self.rng = np.random.default_rng(self.seed)
         self.shape = self.env.action_space.shape
+        self.connected: list[float] = []
 
     def reset(self) -> None:
         self.env.reset(seed=self.seed + self.episodes * self.envs)
         self.episodes += 1
 
+    def actions(self) -> np.ndarray:
+        return self.rng.uniform(-1.0, 1.0, self.shape)
+
     def step(self) -> None:
-        self.env.step(self.rng.uniform(-1.0, 1.0, self.shape))
+        *_, infos = self.env.step(self.actions())
+        self.connected.append(float(infos["terms"][:, CONNECTED].mean()))
+
+    def stats(self) -> dict[str, Any]:
+        """The share of copy-steps whose team was connected (lambda2 computed)."""
+        return {"connected_fraction": float(np.mean(self.connected)) if self.connected else None}
+
+
+class TetherConnected(Tether):
+    """tether with teams that stay connected: lambda2 is computed at every step.
+
+    Each copy's robots share one random velocity (uniform in [-1, 1]^2) and add their
+    own uniform jitter of +-0.01, so the team drifts as a whole and its links hold.
+    """
+
+    name = "tether_connected"
+
+    def actions(self) -> np.ndarray:
+        common = self.rng.uniform(-1.0, 1.0, (self.shape[0], 1, self.shape[2]))
+        return common + self.rng.uniform(-0.01, 0.01, self.shape)
 
 
 class Mpe2(Side):
@@ -166,8 +195,18 @@ class Vmas(Side):
         )
 
 
-SIDES: dict[str, type[Side]] = {"tether": Tether, "mpe2": Mpe2, "vmas": Vmas}
-_MODULES = {"tether": "tether.envs", "mpe2": "mpe2", "vmas": "vmas"}
+SIDES: dict[str, type[Side]] = {
+    "tether": Tether,
+    "tether_connected": TetherConnected,
+    "mpe2": Mpe2,
+    "vmas": Vmas,
+}
+_MODULES = {
+    "tether": "tether.envs",
+    "tether_connected": "tether.envs",
+    "mpe2": "mpe2",
+    "vmas": "vmas",
+}
 
 
 def available(name: str) -> bool:
@@ -224,7 +263,8 @@ def measure_size(
                 }
             )
     out = []
-    for _, _, row in live:
+    for side, _, row in live:
+        row.update(side.stats())
         rs = row["rounds"]
         for clock in ("wall", "cpu"):
             step_s = statistics.median(r[f"step_{clock}_s"] for r in rs)
@@ -269,7 +309,7 @@ def rows(
 def table(results: list[dict[str, Any]]) -> str:
     """A Markdown table: episode rate of every side, and tether's ratio to the others."""
     names = [n for n in SIDES if any(r["side"] == n for r in results)]
-    others = [n for n in names if n != "tether"]
+    others = [n for n in names if not n.startswith("tether")]
     head = (
         "| agents | envs | "
         + " | ".join(f"{n} (agent-steps/s)" for n in names)

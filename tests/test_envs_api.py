@@ -9,7 +9,9 @@ and never enforced, seeds that reproduce ``tether run``'s start, clear errors.
 
 from __future__ import annotations
 
+import re
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +21,7 @@ from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test, see
 import tether.envs as te
 from tether.runner import build
 
-#: one built-in scenario of each kind (docs/environments.md, "Scenario kinds")
+#: one built-in scenario of each kind (docs/how-to/environments.md, "Scenario kinds")
 KINDS = {
     "leader": "silent_demo",
     "continuous": "connectivity_empty",
@@ -167,3 +169,14 @@ def test_bad_options_and_actions_are_one_line_errors() -> None:
     with pytest.raises(RuntimeError, match="other actions were taken"):
         env.step({a: np.zeros(2) for a in env.agents})
         env.scripted_actions()
+
+
+def test_the_docs_give_every_term_its_default_weight_and_every_option() -> None:
+    page = (Path(__file__).parents[1] / "docs/how-to/environments.md").read_text()
+    for name, weight in te.DEFAULT_WEIGHTS.items():
+        row = re.search(rf"^\| `{name}` \| (.*) \| (\S+) \|$", page, re.MULTILINE)
+        assert row is not None, f"docs: no row for the reward term {name}"
+        assert float(row.group(2)) == weight, name
+    assert set(te.DEFAULT_WEIGHTS) == set(te.TERMS)
+    for option in te.EnvOptions.model_fields:
+        assert f"| `{option}` |" in page, f"docs: option {option} is not documented"

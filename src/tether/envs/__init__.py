@@ -19,7 +19,7 @@ start exactly where ``tether run --seed`` starts::
 * :class:`ScriptedPolicy` -- the scenario's strategy (``silent``, ``connectivity``,
   ``multi_target``) as a policy on the same interface.
 
-Observations, actions, reward terms and options: docs/environments.md. Needs
+Observations, actions, reward terms and options: docs/how-to/environments.md. Needs
 ``pip install "tether[envs]"`` (PettingZoo and Gymnasium).
 """
 
@@ -44,7 +44,7 @@ from tether.envs.single import TetherTeamEnv
 
 def parallel_env(scenario: Any, **options: Any) -> TetherParallelEnv:
     """A PettingZoo ``ParallelEnv`` of ``scenario`` (a YAML path, a built-in name, a
-    :class:`tether.config.Scenario` or a dict); ``options`` as in docs/environments.md
+    :class:`tether.config.Scenario` or a dict); ``options`` as in docs/how-to/environments.md
     (``reward={...}``, ``max_neighbours``, ``map_patch_cells``, ``max_speed_mps``,
     ``clearance_m``, ``coverage_cell_m``, ``record``)."""
     return TetherParallelEnv(scenario, **options)
