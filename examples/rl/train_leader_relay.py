@@ -104,7 +104,8 @@ def plot(curve: dict, path: Path) -> None:
     ):
         ax.plot(steps, [p[key] for p in curve["learned"]], "o-", label="PPO (learned)")
         ax.axhline(base[key], color="k", ls="--", label="silent (scripted)")
-        ax.set_xlabel("training steps")
+        ax.set_xlabel("training steps (thousands)")
+        ax.xaxis.set_major_formatter(lambda x, _: f"{x / 1000:g}")
         ax.set_title(label, fontsize=10)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
@@ -115,13 +116,14 @@ def plot(curve: dict, path: Path) -> None:
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    ap.add_argument("--timesteps", type=int, default=150_000)
+    ap.add_argument("--timesteps", type=int, default=300_000)
     ap.add_argument("--evals", type=int, default=10, help="points on the learning curve")
     ap.add_argument("--eval-episodes", type=int, default=20)
     ap.add_argument("--n-envs", type=int, default=4)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=Path("runs/rl_leader_relay"))
     ap.add_argument("--figure", type=Path, help="also write the figure here")
+    ap.add_argument("--json", type=Path, help="also write curve.json here")
     args = ap.parse_args(argv)
 
     import torch
@@ -199,6 +201,8 @@ def main(argv: list[str] | None = None) -> dict:
     plot(result, args.out / "curve.png")
     if args.figure is not None:
         plot(result, args.figure)
+    if args.json is not None:
+        args.json.write_text(json.dumps(result, indent=1) + "\n")
     final = curve[-1]
     print(
         f"learned after {final['timesteps']} steps: return {final['return']:.2f} "
