@@ -307,16 +307,19 @@ def rows(
 
 
 def table(results: list[dict[str, Any]]) -> str:
-    """A Markdown table: episode rate of every side, and tether's ratio to the others."""
+    """A Markdown table: every side's episode rate (agent-steps per processor second),
+    and each tether side's ratio to each other simulator."""
     names = [n for n in SIDES if any(r["side"] == n for r in results)]
-    others = [n for n in names if not n.startswith("tether")]
+    ours = [n for n in names if n.startswith("tether")]
+    others = [n for n in names if n not in ours]
+    ratios = [(a, b) for a in ours for b in others]
     head = (
         "| agents | envs | "
-        + " | ".join(f"{n} (agent-steps/s)" for n in names)
-        + "".join(f" | tether / {n}" for n in others)
+        + " | ".join(names)
+        + "".join(f" | {a} / {b}" for a, b in ratios)
         + " |"
     )
-    lines = [head, "|" + " --- |" * (2 + len(names) + len(others))]
+    lines = [head, "|" + " ---: |" * (2 + len(names) + len(ratios))]
     sizes = sorted({(r["agents"], r["envs"]) for r in results})
     for agents, envs in sizes:
         rate = {
@@ -326,8 +329,7 @@ def table(results: list[dict[str, Any]]) -> str:
         }
         cells = [f"{rate[n]:,.0f}" if n in rate else "-" for n in names]
         cells += [
-            f"{rate['tether'] / rate[n]:,.1f}x" if "tether" in rate and n in rate else "-"
-            for n in others
+            f"{rate[a] / rate[b]:,.1f}x" if a in rate and b in rate else "-" for a, b in ratios
         ]
         lines.append(f"| {agents} | {envs:,} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -341,7 +343,12 @@ def main(argv: Sequence[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--budget-s", type=float, default=1.0, help="stepping time per round")
     ap.add_argument("--sides", nargs="+", default=list(SIDES), choices=list(SIDES))
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/envs_throughput.json")
+    ap.add_argument("--table-of", type=Path, help="only print the table of a results JSON")
     args = ap.parse_args(argv)
+    if args.table_of is not None:
+        saved = json.loads(args.table_of.read_text())["rows"]
+        print(table(saved))
+        return saved
     skipped = [s for s in args.sides if not available(s)]
     if skipped:
         print(f"not installed, left out: {', '.join(skipped)}", flush=True)
