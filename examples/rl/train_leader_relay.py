@@ -95,11 +95,16 @@ def plot(curve: dict, path: Path) -> None:
 
     steps = [p["timesteps"] for p in curve["learned"]]
     base = curve["scripted"]
-    fig, axes = plt.subplots(1, 3, figsize=(11, 3.2), constrained_layout=True)
+    fig, axes = plt.subplots(1, 4, figsize=(14, 3.2), constrained_layout=True)
     for ax, key, label in zip(
         axes,
-        ("return", "path_progress", "connected_steps"),
-        ("episode return", "leader path done (fraction)", "steps connected (fraction)"),
+        ("return", "path_progress", "connected_steps", "steps"),
+        (
+            "episode return",
+            "leader path done (fraction)",
+            "steps connected (fraction)",
+            "episode length (steps)",
+        ),
         strict=True,
     ):
         ax.plot(steps, [p[key] for p in curve["learned"]], "o-", label="PPO (learned)")
@@ -124,7 +129,12 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--out", type=Path, default=Path("runs/rl_leader_relay"))
     ap.add_argument("--figure", type=Path, help="also write the figure here")
     ap.add_argument("--json", type=Path, help="also write curve.json here")
+    ap.add_argument("--replot", type=Path, help="only draw --figure from a curve.json")
     args = ap.parse_args(argv)
+    if args.replot is not None:
+        saved = json.loads(args.replot.read_text())
+        plot(saved, args.figure or args.replot.with_suffix(".png"))
+        return saved
 
     import torch
     from stable_baselines3 import PPO
