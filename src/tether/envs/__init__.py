@@ -30,6 +30,7 @@ from typing import Any
 try:
     import gymnasium  # noqa: F401
     import pettingzoo  # noqa: F401
+    from pettingzoo.utils.conversions import parallel_to_aec
 except ImportError as exc:  # pragma: no cover - depends on the installation
     raise ImportError(
         f"tether.envs needs PettingZoo and Gymnasium ({exc.name} is missing): "
@@ -52,8 +53,6 @@ def parallel_env(scenario: Any, **options: Any) -> TetherParallelEnv:
 
 def env(scenario: Any, **options: Any) -> Any:
     """The AEC form of :func:`parallel_env` (PettingZoo's conversion)."""
-    from pettingzoo.utils.conversions import parallel_to_aec
-
     return parallel_to_aec(parallel_env(scenario, **options))
 
 
