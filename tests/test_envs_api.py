@@ -9,17 +9,19 @@ and never enforced, seeds that reproduce ``tether run``'s start, clear errors.
 
 from __future__ import annotations
 
+import re
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from pettingzoo.test import parallel_api_test, parallel_seed_test
+from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test, seed_test
 
 import tether.envs as te
 from tether.runner import build
 
-#: one built-in scenario of each kind (docs/environments.md, "Scenario kinds")
+#: one built-in scenario of each kind (docs/how-to/environments.md, "Scenario kinds")
 KINDS = {
     "leader": "silent_demo",
     "continuous": "connectivity_empty",
@@ -40,8 +42,18 @@ def test_pettingzoo_parallel_api_and_seed(kind: str) -> None:
         parallel_seed_test(lambda: te.parallel_env(name), num_cycles=12)
 
 
-def test_gymnasium_env_checker_passes_for_the_team_form() -> None:
-    env = te.team_env("silent_demo", max_neighbours=3)
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_pettingzoo_aec_api_and_seed(kind: str) -> None:
+    name = KINDS[kind]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        api_test(te.env(name), num_cycles=12)
+        seed_test(lambda: te.env(name), num_cycles=12)
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_gymnasium_env_checker_passes_for_the_team_form(kind: str) -> None:
+    env = te.team_env(KINDS[kind], max_neighbours=3)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_env(env, skip_render_check=True)
@@ -157,3 +169,14 @@ def test_bad_options_and_actions_are_one_line_errors() -> None:
     with pytest.raises(RuntimeError, match="other actions were taken"):
         env.step({a: np.zeros(2) for a in env.agents})
         env.scripted_actions()
+
+
+def test_the_docs_give_every_term_its_default_weight_and_every_option() -> None:
+    page = (Path(__file__).parents[1] / "docs/how-to/environments.md").read_text()
+    for name, weight in te.DEFAULT_WEIGHTS.items():
+        row = re.search(rf"^\| `{name}` \| (.*) \| (\S+) \|$", page, re.MULTILINE)
+        assert row is not None, f"docs: no row for the reward term {name}"
+        assert float(row.group(2)) == weight, name
+    assert set(te.DEFAULT_WEIGHTS) == set(te.TERMS)
+    for option in te.EnvOptions.model_fields:
+        assert f"| `{option}` |" in page, f"docs: option {option} is not documented"

@@ -3,7 +3,9 @@
 A module the install does not declare (``click`` came in through the test
 extra's dask) works in the test environment and breaks a user's. Every import
 in ``src/tether`` must be the standard library, tether itself, a declared
-dependency, or an optional extra imported inside ``try: ... except ImportError``.
+dependency, or an optional extra imported inside ``try: ... except ImportError`` -- in
+the module itself or in its package's ``__init__.py`` (Python runs a package's
+``__init__`` before any of its modules, so ``tether.envs`` guards ``tether.envs.*``).
 """
 
 from __future__ import annotations
@@ -57,17 +59,26 @@ def _imports(path: Path) -> list[tuple[str, bool]]:
     return found
 
 
+def _guarded_by_packages(path: Path) -> set[str]:
+    """Modules that the ``__init__.py`` of ``path``'s packages import inside a guard."""
+    out: set[str] = set()
+    for folder in path.parents:
+        if folder == SRC.parent:
+            break
+        init = folder / "__init__.py"
+        if init != path and init.exists():
+            out |= {module for module, guarded in _imports(init) if guarded}
+    return out
+
+
 def test_every_import_is_declared():
     required, optional = _declared()
     dists = importlib.metadata.packages_distributions()
     problems = []
     for path in sorted(SRC.rglob("*.py")):
-        # a package whose __init__ imports an optional module under try/except ImportError
-        # (tether.envs) cannot be imported without it: its modules may import it directly
-        init = path.parent / "__init__.py"
-        package_guard = {m for m, g in _imports(init) if g} if init.is_file() else set()
+        by_package = _guarded_by_packages(path)
         for module, guarded in _imports(path):
-            guarded = guarded or module in package_guard
+            guarded = guarded or module in by_package
             if module == "tether" or module in sys.stdlib_module_names or module == "__future__":
                 continue
             owners = {_normal(d) for d in dists.get(module, [module])}

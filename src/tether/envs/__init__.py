@@ -19,7 +19,7 @@ start exactly where ``tether run --seed`` starts::
 * :class:`ScriptedPolicy` -- the scenario's strategy (``silent``, ``connectivity``,
   ``multi_target``) as a policy on the same interface.
 
-Observations, actions, reward terms and options: docs/environments.md. Needs
+Observations, actions, reward terms and options: docs/how-to/environments.md. Needs
 ``pip install "tether[envs]"`` (PettingZoo and Gymnasium).
 """
 
@@ -30,6 +30,7 @@ from typing import Any
 try:
     import gymnasium  # noqa: F401
     import pettingzoo  # noqa: F401
+    from pettingzoo.utils.conversions import parallel_to_aec
 except ImportError as exc:  # pragma: no cover - depends on the installation
     raise ImportError(
         f"tether.envs needs PettingZoo and Gymnasium ({exc.name} is missing): "
@@ -44,7 +45,7 @@ from tether.envs.single import TetherTeamEnv
 
 def parallel_env(scenario: Any, **options: Any) -> TetherParallelEnv:
     """A PettingZoo ``ParallelEnv`` of ``scenario`` (a YAML path, a built-in name, a
-    :class:`tether.config.Scenario` or a dict); ``options`` as in docs/environments.md
+    :class:`tether.config.Scenario` or a dict); ``options`` as in docs/how-to/environments.md
     (``reward={...}``, ``max_neighbours``, ``map_patch_cells``, ``max_speed_mps``,
     ``clearance_m``, ``coverage_cell_m``, ``record``)."""
     return TetherParallelEnv(scenario, **options)
@@ -52,8 +53,6 @@ def parallel_env(scenario: Any, **options: Any) -> TetherParallelEnv:
 
 def env(scenario: Any, **options: Any) -> Any:
     """The AEC form of :func:`parallel_env` (PettingZoo's conversion)."""
-    from pettingzoo.utils.conversions import parallel_to_aec
-
     return parallel_to_aec(parallel_env(scenario, **options))
 
 

@@ -13,7 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from tether.suggest import did_you_mean
 
-#: reward terms and what one unit of each is (docs/environments.md, "Rewards")
+#: reward terms and what one unit of each is (docs/how-to/environments.md, "Rewards")
 TERMS: dict[str, str] = {
     "progress": "task progress this step (metres of leader path, metres closer to the "
     "goals or current targets, percent of the map explored)",
@@ -45,7 +45,7 @@ DEFAULT_WEIGHTS: dict[str, float] = {
 
 
 class EnvOptions(BaseModel):
-    """Options shared by every form of the environment (see docs/environments.md)."""
+    """Options shared by every form of the environment (see docs/how-to/environments.md)."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
