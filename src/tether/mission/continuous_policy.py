@@ -187,8 +187,8 @@ class ContinuousPolicy:
                 reason = str(event.get("reason"))
                 self.dropped[reason] = self.dropped.get(reason, 0) + 1
             if event.get("kind") in KEPT_EVENTS:
-                sim.log(f"mt_{event['kind']}", **{k: w for k, w in event.items()
-                                                  if k not in ("kind", "step")})  # fmt: skip
+                sim.log(event["kind"], **{k: w for k, w in event.items()
+                                          if k not in ("kind", "step")})  # fmt: skip
         anchored = self.ctrl.planner.role[: self.n] == ANCHOR
         arrived = anchored & ~self._anchored
         self._anchored = anchored
