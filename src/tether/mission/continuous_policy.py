@@ -97,7 +97,6 @@ class ContinuousPolicy:
         self.frontiers_given = 0
         self.stale_dropped = 0
         self.dropped: dict[str, int] = {}
-        self.min_lambda2_step = np.inf
         self.lambda2_series: list[float] = [self.ctrl.lambda2()]
         self._map_version = -1
         self._anchored = np.zeros(n, dtype=bool)
@@ -179,7 +178,6 @@ class ContinuousPolicy:
             q, v = out.positions, out.velocities
             self.period += 1
             trail.append(q[: self.n].copy())
-            self.min_lambda2_step = min(self.min_lambda2_step, self.ctrl.lambda2())
         self.lambda2_series.append(self.ctrl.lambda2())
         self.state = TeamState(q, v)
         for event in self.ctrl.drain_events():
