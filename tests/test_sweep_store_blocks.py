@@ -31,6 +31,9 @@ STRATEGY_SCENARIOS = {
     "multi_target": "multi_target_empty",
     "recurrent": "recurrent_demo",
     "utility": "recurrent_demo",
+    "unconstrained": "mission_unconstrained",
+    "silent_exploration": "mission_silent",
+    "continuous_exploration": "mission_continuous",
 }
 
 #: one valid change per top-level block (for the real refusal)
