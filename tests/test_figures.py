@@ -39,7 +39,9 @@ from tether.world.world import World  # noqa: E402
 load_builtins()
 
 ROOT = Path(__file__).resolve().parents[1]
-EXPLORATION = {"recurrent", "utility", "unconstrained", "silent_exploration"}
+EXPLORATION = {
+    "recurrent", "utility", "unconstrained", "silent_exploration", "continuous_exploration"
+}  # fmt: skip
 _UTILITY = {
     "name": "utility",
     "params": {"speed_m_s": 0.4, "comm_range_m": 15.0, "fov_deg": 60.0, "ratio": 0.5},
@@ -53,6 +55,7 @@ RUNS: dict[str, tuple[str, int, dict[str, Any]]] = {
     "utility": ("recurrent_demo", 20, {"strategy": _UTILITY}),
     "unconstrained": ("mission_unconstrained", 20, {}),
     "silent_exploration": ("mission_silent", 20, {}),
+    "continuous_exploration": ("mission_continuous", 20, {}),
 }
 DPI = 60
 

@@ -95,8 +95,8 @@ print("after the run:", imported())
 """
     out = _python(code, str(tmp_path / "run"))
     assert "after import: []" in out
-    names = "['connectivity', 'multi_target', 'recurrent', 'silent', 'silent_exploration', "
-    names += "'unconstrained', 'utility']"
+    names = "['connectivity', 'continuous_exploration', 'multi_target', 'recurrent', 'silent', "
+    names += "'silent_exploration', 'unconstrained', 'utility']"
     assert f"names: {names} True" in out
     assert "after the run: ['tether.recurrent']" in out
 

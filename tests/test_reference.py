@@ -46,6 +46,7 @@ RUNS = {
     "utility": "recurrent_utility",
     "unconstrained": "mission_unconstrained",
     "silent_exploration": "mission_silent",
+    "continuous_exploration": "mission_continuous",
 }
 
 

@@ -33,6 +33,7 @@ STRATEGY_SCENARIOS = {
     "utility": "recurrent_demo",
     "unconstrained": "mission_unconstrained",
     "silent_exploration": "mission_silent",
+    "continuous_exploration": "mission_continuous",
 }
 
 #: one valid change per top-level block (for the real refusal)

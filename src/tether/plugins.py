@@ -46,6 +46,7 @@ BUILTINS: dict[Registry, dict[str, str]] = {
         "utility": "tether.recurrent.strategy",
         "unconstrained": "tether.mission.unconstrained",
         "silent_exploration": "tether.mission.silent_exploration",
+        "continuous_exploration": "tether.mission.continuous_exploration",
     },
     SCENES: {
         "free": "tether.world.scenes",

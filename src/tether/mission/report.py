@@ -39,9 +39,11 @@ from tether.mission.metrics import QUANTILES  # noqa: E402
 
 __all__ = ["main", "write_mission_report"]
 
-PARADIGMS = ("unconstrained", "recurrent", "utility", "silent_exploration")
+PARADIGMS = (
+    "unconstrained", "recurrent", "utility", "silent_exploration", "continuous_exploration"
+)  # fmt: skip
 COLOURS = {"unconstrained": "#555555", "recurrent": "#1f77b4", "utility": "#ff7f0e",
-           "silent_exploration": "#2ca02c"}  # fmt: skip
+           "silent_exploration": "#2ca02c", "continuous_exploration": "#d62728"}  # fmt: skip
 COLUMNS = (
     ("base_time_to_50pct_s", "BS 50 % (s)"),
     ("base_time_to_90pct_s", "BS 90 % (s)"),
@@ -163,7 +165,8 @@ def write_mission_report(sweep_dir: str | Path, out_dir: str | Path) -> Path:
         # the mission metrics are the summary's ``mission`` entry (a dict, not in the table)
         summary = _summary(row, results.folder)
         metrics = {**summary["mission"], "seed": row["seed"], "run_dir": row["run_dir"],
-                   "trial_id": row["trial_id"]}  # fmt: skip
+                   "trial_id": row["trial_id"],
+                   "controller_success": summary.get("controller_success")}  # fmt: skip
         groups[_key(row)].append(metrics)
         summaries[_key(row)].append(summary["mission"])
     if not groups:
@@ -203,6 +206,15 @@ def write_mission_report(sweep_dir: str | Path, out_dir: str | Path) -> Path:
                         f"{test.test}: statistic {test.statistic:.3g}, p = {test.p_value:.3g}, "
                         f"{test.effect_name} {test.effect:.2f} ({test.reason})")  # fmt: skip
                 lines.append(f"- {name}, {n} robots, `{metric}`: {text}")
+    judged = [(k, r) for k, rows in sorted(groups.items()) for r in rows
+              if r.get("controller_success") is not None]  # fmt: skip
+    if judged:
+        held = sum(bool(r["controller_success"]) for _, r in judged)
+        lines += ["", f"Continuous connectivity held by the controller alone "
+                  f"(`controller_success`: no sub-step left the safe set, the guard detecting) "
+                  f"in {held} of {len(judged)} runs."]  # fmt: skip
+        lines += [f"- not held: {k[0]}, {k[1]} robots, {k[2]}, seed {r['seed']}"
+                  for k, r in judged if not r["controller_success"]]  # fmt: skip
     lines += ["", "Runs that did not reach the coverage goal (seed, cause):", ""]
     for key, rows in sorted(groups.items()):
         for r in rows:

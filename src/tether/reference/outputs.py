@@ -97,13 +97,14 @@ class Event:
 
 _TARGET = "the target's id"
 _CONT = ("multi_target",)
+_CONT_MISSION = ("multi_target", "continuous_exploration")  # the mission keeps these
 _EXPL = ("recurrent", "utility", "unconstrained", "silent_exploration")
 
 #: every kind of event a built-in strategy writes, with its own columns
 EVENTS: dict[str, Event] = {
     "stall": Event(
         "the guard found no admissible step and the team braked to rest",
-        ("connectivity", "multi_target"),
+        ("connectivity", *_CONT_MISSION),
         {"substeps": "sub-steps taken in the control period"},
     ),
     "target_added": Event(
@@ -118,13 +119,13 @@ EVENTS: dict[str, Event] = {
     ),
     "target_taken": Event(
         "a robot took up a target and planned its path",
-        _CONT,
+        _CONT_MISSION,
         {"target": _TARGET, "position_m": "the target's position", "path_m": "path length"},
     ),
-    "target_reached": Event("a robot reached a target", _CONT, {"target": _TARGET}),
+    "target_reached": Event("a robot reached a target", _CONT_MISSION, {"target": _TARGET}),
     "target_dropped": Event(
         "a target was given up",
-        _CONT,
+        _CONT_MISSION,
         {"target": _TARGET, "reason": "unreachable, expired or stalled"},
     ),
     "role": Event("a robot changed role", _CONT, {"old": "role before", "new": "role after"}),
@@ -143,7 +144,9 @@ EVENTS: dict[str, Event] = {
     ),
     "election_declined": Event("a robot declined to become the prime traveler", _CONT, {}),
     "help_requested": Event(
-        "a stalled prime asked its neighbours for help", _CONT, {"hops": "links it travels"}
+        "a stalled prime asked its neighbours for help",
+        _CONT_MISSION,
+        {"hops": "links it travels"},
     ),
     "help_ended": Event("a prime's help request ended", _CONT, {}),
     "plan": Event(

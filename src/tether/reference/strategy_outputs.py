@@ -222,6 +222,32 @@ SILENT_EXPLORATION = StrategyOutputs(
     robots=_EXPLORATION.robots,
 )
 
+_CONTROLLER_KEYS = (
+    "controller_success", "min_lambda2_weighted", "guard", "guard_interventions",
+    "safe_set_exits", "tolerance_misses", "stalls", "max_speed_mps", "speed_bound_mps",
+    "min_robot_distance_m", "min_obstacle_clearance_m",
+)  # fmt: skip
+_TARGET_KEYS = (
+    "targets_total", "targets_reached", "targets_dropped", "targets_pending", "replans",
+    "elections", "help_requests",
+)  # fmt: skip
+
+CONTINUOUS_EXPLORATION = StrategyOutputs(
+    summary={
+        **_EXPLORATION.summary,
+        **{k: CONNECTIVITY.summary[k] for k in _CONTROLLER_KEYS},
+        **{k: MULTI_TARGET.summary[k] for k in _TARGET_KEYS},
+        "frontiers_given": Output("frontier targets given to the explorers"),
+        "frontiers_explored_before_reached": Output(
+            "targets dropped because the team explored their frontier before they were reached"
+        ),
+        "targets_dropped_by_reason": Output("dropped targets per reason"),
+        "control_periods": Output("control periods of the continuous controller"),
+    },
+    steps=_EXPLORATION.steps,
+    robots=_EXPLORATION.robots,
+)
+
 #: strategy name -> what it adds to the run folder
 STRATEGY_OUTPUTS: dict[str, StrategyOutputs] = {
     "silent": SILENT,
@@ -231,4 +257,5 @@ STRATEGY_OUTPUTS: dict[str, StrategyOutputs] = {
     "utility": UTILITY,
     "unconstrained": UNCONSTRAINED,
     "silent_exploration": SILENT_EXPLORATION,
+    "continuous_exploration": CONTINUOUS_EXPLORATION,
 }

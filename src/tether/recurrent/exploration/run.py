@@ -54,7 +54,9 @@ class ExplorationRun(Strategy):
     grid
         The true map with its metric placement.
     base_cells
-        BS position in cell coordinates (snapped by the sim).
+        BS position in cell coordinates (snapped by the sim unless ``starts_cells``).
+    starts_cells
+        ``(n, 2)`` start positions in cells (default: the coarse cells nearest the BS).
     """
 
     name = "exploration"
@@ -65,12 +67,14 @@ class ExplorationRun(Strategy):
         config: ExplorationConfig,
         grid: OccupancyGrid,
         base_cells: np.ndarray,
+        starts_cells: np.ndarray | None = None,
     ) -> None:
         super().__init__()
         self.policy = policy
         self.cfg = config
         self.grid = grid
         self.base_cells = np.asarray(base_cells, dtype=float)
+        self.starts_cells = starts_cells
 
     @classmethod
     def from_scenario(
@@ -86,7 +90,9 @@ class ExplorationRun(Strategy):
     def reset(self, world: World, state: TeamState, rng: np.random.Generator) -> None:
         super().reset(world, state, rng)
         self._wall_start = time.perf_counter()
-        self.sim = ExplorationSim(self.grid.occupied, self.base_cells, self.policy, self.cfg)
+        self.sim = ExplorationSim(
+            self.grid.occupied, self.base_cells, self.policy, self.cfg, starts=self.starts_cells
+        )
         self.policy.start(self.sim)
         self.out_steps = np.zeros(self.sim.n, dtype=int)
         self.mission = MissionMetrics(self.sim.n, self.sim.explored_fraction())

@@ -152,6 +152,9 @@ class ExplorationSim:
         The decision-making (:class:`ExplorationPolicy`).
     config
         Physical parameters.
+    starts
+        ``(n, 2)`` start positions (cell coordinates); the BS is then used as given,
+        not snapped. Default: the coarse cells nearest the BS (:func:`start_cells`).
     """
 
     def __init__(
@@ -160,6 +163,7 @@ class ExplorationSim:
         base: np.ndarray,
         strategy: ExplorationPolicy,
         config: ExplorationConfig | None = None,
+        starts: np.ndarray | None = None,
     ) -> None:
         self.cfg = config or ExplorationConfig()
         self.occupied = np.asarray(occupied, dtype=bool)
@@ -171,7 +175,11 @@ class ExplorationSim:
         self.link: LinkModel = LINK_MODELS.get(self.cfg.link_model)(**self.cfg.link_params)
         n = self.cfg.n_robots
         self.n = n
-        self.base, starts = start_cells(self.occupied, base, n, self.cfg.coarse_factor)
+        if starts is None:
+            self.base, starts = start_cells(self.occupied, base, n, self.cfg.coarse_factor)
+        else:
+            self.base = np.asarray(base, dtype=float).copy()
+            starts = np.array(starts, dtype=float).reshape(n, 2)
         self.free_region = _reachable_free(self.occupied, self.base)
         self.free_total = int(self.free_region.sum())
         self.pos = starts
