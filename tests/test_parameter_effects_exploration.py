@@ -27,7 +27,13 @@ EXPLORE = {
     "output": {"figures": False},
 }  # fmt: skip
 #: the strategies on the exploration simulator; they share its parameters
-EXPLORERS = ("recurrent", "utility", "unconstrained", "silent_exploration")
+EXPLORERS = (
+    "recurrent",
+    "utility",
+    "unconstrained",
+    "silent_exploration",
+    "continuous_exploration",
+)
 BOTH = pytest.mark.parametrize("name", EXPLORERS)
 
 
@@ -65,9 +71,12 @@ def shared(*keys: str) -> list[str]:
 @effect(*shared("speed_m_s"))
 def test_speed_bounds_each_step_and_speeds_the_team(name: str) -> None:
     slow, fast = explore(name, speed_m_s=0.2), explore(name, speed_m_s=0.6)
+    # the continuous controller cruises below its top speed (cruise_fraction), as the
+    # paper's traveling force does; the others move at the speed bound
+    reach = 0.3 if name == "continuous_exploration" else 0.9
     for r, speed in ((slow, 0.2), (fast, 0.6)):
         step = np.linalg.norm(np.diff(r.positions, axis=0), axis=2)
-        assert step.max() <= speed + 1e-9 and step.max() > 0.9 * speed
+        assert step.max() <= speed + 1e-9 and step.max() > reach * speed
     assert travel(fast).sum() > 1.5 * travel(slow).sum()
 
 
@@ -82,8 +91,11 @@ def test_a_wider_or_finer_scan_sees_more(name: str) -> None:
     assert explored(fine)[0] > 1.2 * explored(coarse)[0]  # the first, full-circle scan
 
 
-@pytest.mark.parametrize("name", [s for s in EXPLORERS if s != "silent_exploration"])
-@effect(*[f"{s}:scan_steps" for s in EXPLORERS if s != "silent_exploration"])
+SCANNERS = [s for s in EXPLORERS if s not in ("silent_exploration", "continuous_exploration")]
+
+
+@pytest.mark.parametrize("name", SCANNERS)
+@effect(*[f"{s}:scan_steps" for s in SCANNERS])
 def test_slower_scans_hold_the_robots(name: str) -> None:
     def standing(r: Ran) -> int:  # robot-steps without a move
         return int((np.linalg.norm(np.diff(r.positions, axis=0), axis=2)[1:] == 0).sum())
@@ -97,8 +109,8 @@ def test_silent_exploration_refuses_scans() -> None:
         explore("silent_exploration", 1, scan_steps=8)
 
 
-@BOTH
-@effect(*shared("coarse_cell_m"))
+@pytest.mark.parametrize("name", [s for s in EXPLORERS if s != "continuous_exploration"])
+@effect(*[f"{s}:coarse_cell_m" for s in EXPLORERS if s != "continuous_exploration"])
 def test_robots_start_on_coarse_cells(name: str) -> None:
     for cell in (0.3, 0.6):
         q = explore(name, 0, coarse_cell_m=cell).built.initial.positions
@@ -187,8 +199,21 @@ def test_signal_parameters_set_the_reach(name: str) -> None:
     assert reach_cells(low, walls=3) > reach_cells(high, walls=3) > 0
 
 
-@BOTH
-@effect(*shared("failures.at_s"))
+FAILING = [s for s in EXPLORERS if s != "continuous_exploration"]
+NO_EFFECT.update({
+    f"continuous_exploration:{k}": "refused: robot failures are not modelled by the "
+    "continuous controller (test_continuous_exploration_refuses_failures)"
+    for k in ("failures.at_s", "failures.random", "failures.window_s")
+})  # fmt: skip
+
+
+def test_continuous_exploration_refuses_failures() -> None:
+    with pytest.raises(ScenarioError, match="failures are not modelled"):
+        explore("continuous_exploration", 1, failures={"at_s": {1: 5.0}})
+
+
+@pytest.mark.parametrize("name", FAILING)
+@effect(*[f"{s}:failures.at_s" for s in FAILING])
 def test_a_robot_fails_at_its_time(name: str) -> None:
     data = for_strategy(name, sim__dt_s=2.0, sim__max_steps=12)
     data["strategy"]["params"]["failures"] = {"at_s": {1: 12.0}}  # step 6 of 2 s
@@ -199,8 +224,8 @@ def test_a_robot_fails_at_its_time(name: str) -> None:
     assert np.linalg.norm(np.diff(q[:6], axis=0), axis=1).max() > 0
 
 
-@BOTH
-@effect(*shared("failures.random", "failures.window_s"))
+@pytest.mark.parametrize("name", FAILING)
+@effect(*[f"{s}:{k}" for s in FAILING for k in ("failures.random", "failures.window_s")])
 def test_random_failures_fall_in_their_window(name: str) -> None:
     for seed in range(3):
         data = for_strategy(name, seed=seed, sim__max_steps=30)

@@ -147,6 +147,11 @@ class ContinuousExploration(ExplorationPlugin):
                 f"{src}.failures: robot failures are not modelled by continuous_exploration; "
                 "remove strategy.params.failures"
             )
+        if params.scan_steps != 1:
+            raise ScenarioError(
+                f"{src}.scan_steps: {params.scan_steps}: the controller moves its robots "
+                "itself, a scan never holds one; remove scan_steps (or set it to 1)"
+            )
         controller_params(params, scenario.source)  # its errors name the scenario
         grid = cls._grid(scenario, world)
         run = super().from_scenario(params, scenario, world, initial, rng)
