@@ -58,7 +58,8 @@ def test_ragged_waypoints(tmp_path, capsys):
 
 def test_a_map_resolution_of_1e308(tmp_path, capsys):
     data = on_map(tmp_path, resolution_m=1e308)
-    validate_and_run(tmp_path, capsys, data, "world.params", "resolution", "wide")
+    validate_and_run(tmp_path, capsys, data, "bad.yaml: world.params.resolution_m: 1e+308 m",
+                     "wide")  # fmt: skip
 
 
 @pytest.mark.parametrize("on_a_map", [True, False])
