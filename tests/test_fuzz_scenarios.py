@@ -8,6 +8,8 @@ benchmarks/fuzz_scenarios.py`` runs thousands and prints the counts docs/robustn
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -55,9 +57,16 @@ def _robots_as_many_as_steps(data: dict) -> None:
     data["sweep"]["team.n_robots"][3] = _fuzz._TAG_SENTINEL
 
 
+def _list_in_a_zip(data: dict) -> None:
+    data["sweep"]["zip"][0][0] = data["sweep"]["axes"]["strategy.params.coordination"]
+    del data["world"]["dim"]
+
+
 @pytest.mark.parametrize(
     ("name", "mutate", "edits", "needle"),
     [
+        # exit code 1 (TypeError: unhashable type: 'list') from the sweep grammar
+        ("paper/recurrent_fig5_6_utility", _list_in_a_zip, [], "is not an axis name"),
         # exit code 1 (TypeError: unhashable type: 'set') from the sweep grammar
         ("paper/continuous_fig9", _set_in_a_zip, ["tag:!!set {a: null}"], "tag !!set"),
         # a hang: 12,000 robots placed in the 50 x 70 x 10 m box for hours
@@ -74,3 +83,12 @@ def test_the_cases_the_benchmark_found_are_refused_in_one_line(
         kind, validate, run = _fuzz.check_case(text, tmp_path)
     assert kind == "refused", (kind, validate.err, run and run.err)
     assert needle in validate.err
+
+
+def test_the_docs_show_the_benchmark_table() -> None:
+    """docs/reference/robustness.md holds what ``fuzz_scenarios.py --table`` prints."""
+    table = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "fuzz_scenarios.py"), "--table"],
+        capture_output=True, text=True, check=True, timeout=120,
+    ).stdout.strip()  # fmt: skip
+    assert table and table in (ROOT / "docs" / "reference" / "robustness.md").read_text()
