@@ -6,9 +6,11 @@ keys), runs each through ``validate`` then ``run`` (2 steps, numpy paths, in thi
 each command bounded by 120 s) and prints the counts: refused in one line, ran, and the
 broken promises (tracebacks, exit code 1, hangs, multi-line errors, validate/run
 disagreements), with the first cases of each kind. Writes JSON with the machine to
-``benchmarks/results/fuzz_scenarios.json``.
+``benchmarks/results/fuzz_scenarios.json``; ``--table`` prints that file's counts as the
+Markdown table docs/reference/robustness.md holds (without fuzzing).
 
-    python benchmarks/fuzz_scenarios.py --cases 2000 --seed 0
+    python benchmarks/fuzz_scenarios.py --cases 2500 --seed 0
+    python benchmarks/fuzz_scenarios.py --table
 """
 
 from __future__ import annotations
@@ -32,6 +34,32 @@ from hypothesis import HealthCheck, Phase, given, seed, settings  # noqa: E402
 import _fuzz  # noqa: E402
 from tether.runfolder import machine  # noqa: E402
 
+RESULTS = ROOT / "benchmarks" / "results" / "fuzz_scenarios.json"
+#: what each count of the table means
+MEANINGS = {
+    "refused": "both commands refused it with the same one `error:` line, exit code 2",
+    "ran": "both commands accepted it and the run finished (exit code 0)",
+    "traceback": "a traceback was printed",
+    "exit-1": "exit code 1 (an internal error)",
+    "hang": f"a command ran longer than {_fuzz.HANG_S:g} s",
+    "not-one-line": "a refusal that was not one `error:` line",
+    "disagree": "`validate` and `run` answered differently",
+}
+
+
+def markdown_table(result: dict) -> str:
+    """The counts of a benchmark result (its JSON) as the Markdown table the docs show."""
+    counts, when = result["counts"], result["machine"]["date"][:10]
+    lines = [
+        f"{counts['cases']:,} cases (seed {result['seed']}, {result['seconds'] / 60:.0f} min "
+        f"on {result['machine']['cpu_count']} cores, {when}):",
+        "",
+        "| outcome | cases |",
+        "| --- | ---: |",
+    ]
+    lines += [f"| {MEANINGS[key]} | {counts[key]:,} |" for key in MEANINGS]
+    return "\n".join(lines)
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -40,7 +68,12 @@ def main() -> None:
     parser.add_argument("--memory-gb", type=float, default=8.0,
                         help="address-space limit of this process (a runaway case fails, "
                         "not the machine)")  # fmt: skip
+    parser.add_argument("--table", action="store_true",
+                        help=f"print the Markdown table of {RESULTS.name} and stop")  # fmt: skip
     args = parser.parse_args()
+    if args.table:
+        print(markdown_table(json.loads(RESULTS.read_text())))
+        return
     limit = int(args.memory_gb * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     counts: Counter = Counter()
@@ -79,7 +112,7 @@ def main() -> None:
         print(f"{kind}:")
         for line in lines:
             print(f"  {line}")
-    out = ROOT / "benchmarks" / "results" / "fuzz_scenarios.json"
+    out = RESULTS
     out.parent.mkdir(parents=True, exist_ok=True)
     result = {"machine": machine(), "seed": args.seed, "seconds": round(seconds, 1),
               "counts": table, "cases_per_base": dict(bases), "examples": examples}  # fmt: skip

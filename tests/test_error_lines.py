@@ -58,7 +58,17 @@ def test_ragged_waypoints(tmp_path, capsys):
 
 def test_a_map_resolution_of_1e308(tmp_path, capsys):
     data = on_map(tmp_path, resolution_m=1e308)
-    validate_and_run(tmp_path, capsys, data, "world.params", "resolution", "wide")
+    validate_and_run(tmp_path, capsys, data, "bad.yaml: world.params.resolution_m: 1e+308 m",
+                     "wide")  # fmt: skip
+
+
+@pytest.mark.parametrize("on_a_map", [True, False])
+def test_an_unknown_scene_parameter_is_its_own_field(tmp_path, capsys, on_a_map):
+    """Not the map's ``world.params.path``: the misspelt key, with the close one."""
+    data = on_map(tmp_path) if on_a_map else base()
+    data["world"]["params"]["resolution"] = 0.1
+    validate_and_run(tmp_path, capsys, data, "bad.yaml: world.params.resolution: unknown",
+                     "did you mean 'resolution_m'?" if on_a_map else "(accepted: dim,")  # fmt: skip
 
 
 def test_a_map_path_longer_than_a_file_name_may_be(tmp_path, capsys):

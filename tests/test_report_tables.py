@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import yaml
 
-from _cli import tether
+from _cli import one_error_line, tether
 from tether.recurrent.report import index_runs
 from tether.recurrent.report_settings import setting_label
 from tether.recurrent.report_tables import ci95, welch
@@ -128,6 +128,16 @@ def test_paper_report_from_the_campaigns_sweeps(tmp_path: Path, capsys) -> None:
     for fig in ("recurrent_fig4_tiny", "recurrent_fig5", "recurrent_fig6", "recurrent_fig_time"):
         assert (tmp_path / "paper" / "figures" / f"{fig}.png").exists()
         assert f"(figures/{fig}.png)" in table
+    # a link at a figure's path is never written through: one line, the linked file intact
+    mine = tmp_path / "mine.png"
+    mine.write_bytes(b"the user's own file")
+    link = tmp_path / "paper" / "figures" / "recurrent_fig5.png"
+    link.unlink()
+    link.symlink_to(mine)
+    code, out, err = tether(capsys, "report", *map(str, folders), "--paper", "recurrent",
+                            "--out", str(tmp_path / "paper"))  # fmt: skip
+    one_error_line(code, err, "recurrent_fig5.png: is a symbolic link")
+    assert mine.read_bytes() == b"the user's own file" and link.is_symlink()
 
 
 def test_paper_report_refuses_what_it_cannot_use(tmp_path: Path, capsys) -> None:

@@ -49,8 +49,9 @@ def test_all_scenes_registered() -> None:
 def test_make_scene_errors_are_one_line() -> None:
     with pytest.raises(ScenarioError, match="unknown; expected one of: .*town"):
         make_scene("towm", 0)
-    with pytest.raises(ScenarioError, match=r"unknown parameter\(s\) widht; accepted: .*size_m"):
-        make_scene("town", 0, widht=3)
+    with pytest.raises(ScenarioError, match=r"sise_m: unknown parameter of scene 'town' "
+                       r"\(did you mean 'size_m'\?\).*\(accepted: size_m"):  # fmt: skip
+        make_scene("town", 0, sise_m=3)
     with pytest.raises(ScenarioError, match="resolution_m: must be a positive number"):
         make_scene("town", 0, resolution_m=-1)
     with pytest.raises(ScenarioError, match="street_m"):

@@ -82,6 +82,8 @@ def test_zip_moves_axes_together_and_crosses_the_rest():
         ({"sensing.range_m": []}, "sweep.sensing.range_m", "empty axis"),
         ({"axes": {"a.b": [1, 2], "c.d": [1]}, "zip": [["a.b", "c.d"]]}, "sweep.zip", "equal"),
         ({"axes": {"a.b": [1, 2]}, "zip": [["a.b", "x.y"]]}, "sweep.zip", "not an axis"),
+        ({"axes": {"a.b": [1, 2]}, "zip": [[["a.b"], "a.b"]]}, "sweep.zip", "not an axis name"),
+        ({"axes": {"a.b": [1, 2]}, "zip": [[{"a": 1}, "a.b"]]}, "sweep.zip", "not an axis name"),
         ({"a.b": {"start": 5, "stop": 1, "step": 1}}, "sweep.a.b", "below start"),
         ({"a.b": {"start": 1, "stop": 5}}, "sweep.a.b", "step or num"),
         ({"a.b": [1], "seeds": 0}, "sweep.seeds", ">= 1"),

@@ -162,7 +162,8 @@ def run(
 
     sc = _load(scenario, set_)
     say(f"running {sc.name} ({sc.strategy.name}, {count(sc.team.n_robots, 'robot')}) ...")
-    steps = None if quiet else StepProgress(out, say, sc.sim.max_steps)
+    placing = f"building the world and placing {count(sc.team.n_robots, 'robot')}"
+    steps = None if quiet else StepProgress(out, say, sc.sim.max_steps, preparing=placing)
     try:
         with noting("no run folder was written"):
             outcome = run_scenario(
@@ -252,16 +253,15 @@ def sweep(
     if out_dir is None:
         out_dir = Path(DEFAULT_SWEEP_DIR + (QUICK_SUFFIX if quick else ""))
     resume = f"finished trials are kept in {out_dir}; the same command resumes the sweep"
-    with noting(resume):
-        result = run_sweep(
-            sc,
-            out_dir,
-            seeds=seeds,
-            executor=executor,
-            workers=workers,
-            address=address,
-            progress=None if quiet else progress_for(out, say),
-        )
+    checking = "checking every combination of the sweep (its world and team)"
+    progress = None if quiet else progress_for(out, say, preparing=checking)
+    try:
+        with noting(resume):
+            result = run_sweep(sc, out_dir, seeds=seeds, executor=executor, workers=workers,
+                               address=address, progress=progress)  # fmt: skip
+    finally:
+        if progress is not None:
+            progress.stop()
     out.print(
         f"{result.n_runs} runs ({result.n_skipped} already done); table: {result.table}",
         markup=False,
@@ -327,14 +327,17 @@ def validate(
     """
     _load_plugins(plugin)
     from tether.limits import format_bytes
+    from tether.progress import Working
     from tether.runfolder import check_writable
     from tether.runner import build, strategy_class, strategy_params
     from tether.usercode import code_references
 
     sc = _load(scenario, set_, quick)
-    need = build(sc).memory_bytes
-    calls = code_references(strategy_params(sc, strategy_class(sc)), "strategy.params.")
-    n_combos = _check_sweep_block(scenario, set_, sc, quick)
+    with Working(f"checking {scenario}: its world, {count(sc.team.n_robots, 'robot')}, "
+                 "strategy and sweep", out, say):  # fmt: skip
+        need = build(sc).memory_bytes
+        calls = code_references(strategy_params(sc, strategy_class(sc)), "strategy.params.")
+        n_combos = _check_sweep_block(scenario, set_, sc, quick)
     check_writable(sc.output.dir)  # where `tether run` would write (without --out)
     size = ", quick size" if quick else ""
     swept = f", sweep of {count(n_combos, 'combination')}{size}" if n_combos else size

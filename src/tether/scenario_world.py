@@ -172,13 +172,12 @@ def _field_of(message: str, names: list[str], files: list[SceneFile]) -> str:
     another parameter than the file is reported under that parameter's own field, e.g.
     ``world.params.bounds_m: must be ... (reading <file>)``.
     """
-    if not files:
-        return f"world.params: {message}"
     for name in names:
         found = re.search(rf"(^|: ){re.escape(name)}: ", message)
         if found and name not in FILE_KEYS:
-            return f"world.params.{name}: {message[found.end() :]} (reading {files[0].given})"
-    return f"world.params.{files[0].key}: {message}"
+            reading = f" (reading {files[0].given})" if files else ""
+            return f"world.params.{name}: {message[found.end() :]}{reading}"
+    return f"world.params.{files[0].key}: {message}" if files else f"world.params: {message}"
 
 
 def build_world(scenario: Scenario, rng: np.random.Generator) -> World:

@@ -384,6 +384,12 @@ def _groups(
         if len(group) < 2:
             raise SweepError(field, f"group {group!r} zips fewer than two axes; list two or more")
         for key in group:
+            if not isinstance(key, str):  # a list or a mapping cannot name an axis
+                shown = repr(key) if len(repr(key)) <= 60 else repr(key)[:57] + "..."
+                raise SweepError(
+                    field, f"{shown} is not an axis name; a group lists axes by their keys, "
+                    "e.g. [team.n_robots, sensing.range_m]",
+                )  # fmt: skip
             if key not in axes:
                 raise SweepError(
                     field, f"{key!r} is not an axis of the sweep; axes: {', '.join(map(str, axes))}"

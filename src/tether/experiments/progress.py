@@ -10,9 +10,9 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from tether.experiments.executors import TrialOutcome
-from tether.progress import progress_bar
+from tether.progress import Working, progress_bar
 
-__all__ = ["LineProgress", "RichProgress", "TrialProgress", "progress_for"]
+__all__ = ["LineProgress", "Preparing", "RichProgress", "TrialProgress", "progress_for"]
 
 
 class TrialProgress(Protocol):
@@ -87,8 +87,38 @@ class RichProgress:
         self._bar.stop()
 
 
-def progress_for(console: Any, say: Callable[[str], None]) -> TrialProgress:
-    """A progress bar when ``console`` is a terminal, else plain lines through ``say``."""
-    if getattr(console, "is_terminal", False):
-        return RichProgress(console)
-    return LineProgress(say)
+class Preparing:
+    """A sweep's progress that shows its preparation (checking every combination) until
+    its trials start (:class:`tether.progress.Working`), then ``trials``'s.
+
+    :meth:`stop` also ends the preparation's display when the sweep is refused before
+    any trial.
+    """
+
+    def __init__(self, trials: TrialProgress, working: Working) -> None:
+        self.trials = trials
+        self.working = working.start()
+
+    def start(self, total: int, skipped: int) -> None:
+        self.working.stop()
+        self.trials.start(total, skipped)
+
+    def advance(self, outcome: TrialOutcome, done: int, failed: int) -> None:
+        self.trials.advance(outcome, done, failed)
+
+    def stop(self) -> None:
+        self.working.stop()
+        self.trials.stop()
+
+
+def progress_for(
+    console: Any, say: Callable[[str], None], preparing: str | None = None
+) -> TrialProgress:
+    """A progress bar when ``console`` is a terminal, else plain lines through ``say``;
+    with ``preparing``, what the sweep does before its trials is shown until they start."""
+    trials: TrialProgress = (
+        RichProgress(console) if getattr(console, "is_terminal", False) else LineProgress(say)
+    )
+    if preparing is None:
+        return trials
+    return Preparing(trials, Working(preparing, console, say))

@@ -41,7 +41,7 @@ from tether.errors import TetherError
 from tether.experiments.results import SweepResults, load_results
 from tether.recurrent.report_settings import CAMPAIGNS, MAP_LABELS, display_name, setting_label
 from tether.recurrent.report_tables import RunIndex, markdown, run_statistics
-from tether.runfolder import atomic_write, machine, write_json
+from tether.runfolder import atomic_write, machine, save_figure, write_json
 from tether.viz.plots import pyplot
 
 __all__ = ["PAPERS", "campaign_kind", "index_runs", "write_paper_report"]
@@ -172,9 +172,7 @@ def _fig4(index: RunIndex, figures: Path) -> list[Path]:
                 ax.legend(fontsize=8)
         axes[0].set_ylabel("explored area [%] (mean ± sd)")
         fig.tight_layout()
-        out.append(figures / f"recurrent_fig4_{m}.png")
-        fig.savefig(out[-1], dpi=120)
-        plt.close(fig)
+        out.append(save_figure(fig, figures / f"recurrent_fig4_{m}.png"))
     return out
 
 
@@ -198,9 +196,7 @@ def _fig5_6(index: RunIndex, figures: Path) -> list[Path]:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    out.append(figures / "recurrent_fig5.png")
-    fig.savefig(out[-1], dpi=120)
-    plt.close(fig)
+    out.append(save_figure(fig, figures / "recurrent_fig5.png"))
 
     def summaries(m: str, label: str) -> list[dict[str, Any]]:
         return [json.loads((r / "summary.json").read_text()) for r in index.of(m, label)]
@@ -227,9 +223,7 @@ def _fig5_6(index: RunIndex, figures: Path) -> list[Path]:
     taxes[0][0].legend(fontsize=8, loc="lower left")
     for figure, name in ((fig, "recurrent_fig6.png"), (tshare, "recurrent_fig_time.png")):
         figure.tight_layout()
-        out.append(figures / name)
-        figure.savefig(out[-1], dpi=120)
-        plt.close(figure)
+        out.append(save_figure(figure, figures / name))
     return out
 
 

@@ -229,6 +229,7 @@ def load_map_layers(
     occ_th, free_th = _thresholds(path, occupied_thresh, free_thresh)
     values, maxval = read_image(path)
     meta = {"source": str(path), "image": str(path), "mode": "trinary"}
+    meta["resolution_key"] = "resolution_m"  # where the resolution came from
     return _layers(
         values, maxval, resolution, origin, "trinary", occ_th, free_th, bool(negate), meta
     )
@@ -273,6 +274,7 @@ def _load_yaml(
         reason = str(exc).split(": ", 1)[-1]
         raise MapError.at(path, "image", f"{image_name!r}: {reason}") from None
     meta = {"source": str(path), "image": str(image), "mode": mode}
+    meta["resolution_key"] = "resolution" if resolution_m is None else "resolution_m"
     return _layers(values, maxval, resolution, origin, mode, occ_th, free_th, neg, meta)
 
 
@@ -293,9 +295,10 @@ def _layers(
     occupied = _to_grid_layout(occupied)
     unknown = _to_grid_layout(unknown)
     width_m = resolution * max(occupied.shape)
+    key = meta.pop("resolution_key")  # the YAML's resolution, or the scenario's
     if width_m > MAX_LENGTH_M:
         raise MapError.at(
-            meta["source"], "resolution",
+            meta["source"], key,
             f"{resolution:g} m per cell makes the map {width_m:.3g} m wide, more than "
             f"{MAX_LENGTH_M:g} m; give a resolution in metres per cell, e.g. 0.05",
         )  # fmt: skip

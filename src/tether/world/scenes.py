@@ -35,6 +35,7 @@ from scipy.spatial import cKDTree
 from tether.config import MAX_LENGTH_M
 from tether.errors import MapError, ScenarioError, TetherWarning
 from tether.registry import SCENES
+from tether.suggest import did_you_mean
 from tether.world.extrude import coarsen, extrude
 from tether.world.grid import OccupancyGrid
 from tether.world.maps import load_map
@@ -384,10 +385,11 @@ def make_scene(name: str, rng: np.random.Generator | int | None = None, **params
     factory = SCENES.get(name)
     accepted = [p for p in inspect.signature(factory).parameters if p != "rng"]
     unknown = sorted(set(params) - set(accepted))
-    if unknown:
+    if unknown:  # named first, so that the scenario's error names it as its field
         raise ScenarioError(
-            f"scene {name!r}: unknown parameter(s) {', '.join(unknown)}; "
-            f"accepted: {', '.join(accepted + ['seed'])}"
+            f"{unknown[0]}: unknown parameter of scene {name!r}"
+            f"{did_you_mean(unknown[0], [*accepted, 'seed'])}; remove it or check its "
+            f"spelling (accepted: {', '.join([*accepted, 'seed'])})"
         )
     required = [
         p.name
