@@ -125,7 +125,9 @@ def refusal(bound: Bound, value: float) -> str | None:
 def test_a_value_beyond_a_declared_bound_is_refused_naming_the_key(bound: Bound) -> None:
     key = bound.key if bound.strategy is None else f"strategy.params.{bound.key}"
     message = refusal(bound, bound.outside())
-    assert message is not None, f"{key} = {bound.outside()!r} was accepted ({bound.kind} {bound.limit})"
+    assert message is not None, (
+        f"{key} = {bound.outside()!r} was accepted ({bound.kind} {bound.limit})"
+    )
     assert message.startswith(f"s.yaml: {key}: ") and "\n" not in message, message
     if bound.kind in ("ge", "le"):  # the bound itself is allowed (for this key)
         on = refusal(bound, bound.limit)

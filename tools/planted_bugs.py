@@ -70,8 +70,10 @@ def check_catalog(bugs: list[Bug]) -> None:
         text = (ROOT / bug.path).read_text()
         count = text.count(bug.old)
         if count != 1:
-            raise SystemExit(f"planted_bugs: {bug.id}: the text to replace occurs {count} "
-                             f"times in {bug.path} (the source changed: update the catalog)")  # fmt: skip
+            raise SystemExit(
+                f"planted_bugs: {bug.id}: the text to replace occurs {count} times in "
+                f"{bug.path} (the source changed: update the catalog)"
+            )
         compile(text.replace(bug.old, bug.new), bug.path, "exec")
         for test in bug.tests:
             if not (ROOT / test.split("::")[0]).is_file():
@@ -164,7 +166,8 @@ def table(outcomes: list[Outcome]) -> str:
         f"{n} planted bugs: **{counts['caught']} caught by a failing test** "
         f"({100 * counts['caught'] / max(n, 1):.0f} %), {counts['crash']} only by a crash, "
         f"{counts['hang']} by a hang, {counts['survived']} survived"
-        + (f", {counts['invalid']} invalid" if counts["invalid"] else "") + ".",
+        + (f", {counts['invalid']} invalid" if counts["invalid"] else "")
+        + ".",
         "",
         "| bug | area | what it breaks | verdict | first failing test |",
         "| --- | --- | --- | --- | --- |",
@@ -187,8 +190,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", nargs="+", metavar="ID", help="plant only these bugs")
     ap.add_argument("--list", action="store_true", help="list the catalog and exit")
     ap.add_argument("--timeout", type=float, default=300.0, help="per-test timeout (s)")
+    where = DOC.relative_to(ROOT)
     ap.add_argument("--write-docs", action="store_true",
-                    help=f"rewrite the table in {DOC.relative_to(ROOT)} and the JSON results")  # fmt: skip
+                    help=f"rewrite the table in {where} and the JSON results")  # fmt: skip
     args = ap.parse_args(argv)
     bugs = [b for b in BUGS if not args.only or b.id in args.only]
     unknown = set(args.only or ()) - {b.id for b in BUGS}

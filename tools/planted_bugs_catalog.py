@@ -29,6 +29,8 @@ class Bug:
 
 C = "src/tether/continuous/"
 
+# one bug per call, its fields in the order of Bug (kept compact for reading side by side)
+# fmt: off
 BUGS: list[Bug] = [
     # -- parameters accepted but without effect -----------------------------------------
     Bug("estimator-failures-dropped", "parameters", C + "strategy.py",
@@ -319,3 +321,4 @@ BUGS: list[Bug] = [
         ("tests/test_envs_api.py", "tests/test_envs_scripted.py", "tests/test_envs_vector.py"),
         "the margin reward term uses the shortest link of the spanning tree"),
 ]
+# fmt: on
