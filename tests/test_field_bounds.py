@@ -4,9 +4,13 @@ For each numeric field of :class:`tether.config.Scenario` and of every built-in
 strategy's ``Params`` with a declared bound (``ge``, ``gt``, ``le``, ``lt``), the value
 just outside it (the bound itself for a strict one, the next float or integer beyond it
 for an inclusive one) is refused with tether's one-line error naming the key, and the
-value on the bound of an inclusive one is not refused for that key. A bound removed or
-loosened in a model (``sim.collision_distance_m`` accepting -2, a leader speed of 0 that
-then fails inside the run) fails here, with no hand-written case per key.
+value on the bound of an inclusive one is not refused for that key.
+
+The bounds themselves are a contract with users (the scenario reference shows them), so
+they are also recorded in ``tests/data/field_bounds.txt``: a bound removed or loosened in a
+model (``sim.collision_distance_m`` accepting -2, a leader speed of 0 that then fails inside
+the run) fails :func:`test_the_bounds_are_the_recorded_ones`. A bound changed on purpose is
+recorded again with ``python tests/test_field_bounds.py``.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import copy
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import annotated_types as at
@@ -63,6 +68,8 @@ class Bound:
         return math.nextafter(self.limit, -math.inf if below else math.inf)
 
 
+RECORD = Path(__file__).parent / "data" / "field_bounds.txt"
+
 KINDS = {at.Ge: "ge", at.Gt: "gt", at.Le: "le", at.Lt: "lt"}
 
 
@@ -90,6 +97,19 @@ BOUNDS = [
     *(b for name in sorted(BUILTINS[STRATEGIES]) for b in bounds_of(
         STRATEGIES.get(name).Params, name)),
 ]  # fmt: skip
+
+
+def recorded_lines() -> list[str]:
+    """One line per bound: ``key kind limit``, sorted."""
+    return sorted(f"{b.id.rsplit(':', 1)[0]} {b.kind} {b.limit!r}" for b in BOUNDS)
+
+
+def test_the_bounds_are_the_recorded_ones() -> None:
+    now, recorded = set(recorded_lines()), set(RECORD.read_text().splitlines())
+    assert now == recorded, (
+        f"bounds changed: not recorded {sorted(now - recorded)[:5]}, recorded but gone "
+        f"{sorted(recorded - now)[:5]}; if on purpose: python tests/test_field_bounds.py"
+    )
 
 
 def test_the_walk_finds_the_bounds_users_meet() -> None:
@@ -132,3 +152,8 @@ def test_a_value_beyond_a_declared_bound_is_refused_naming_the_key(bound: Bound)
     if bound.kind in ("ge", "le"):  # the bound itself is allowed (for this key)
         on = refusal(bound, bound.limit)
         assert on is None or f"{key}: " not in on, on
+
+
+if __name__ == "__main__":  # record the bounds after a deliberate change
+    RECORD.write_text("\n".join(recorded_lines()) + "\n")
+    print(f"{RECORD}: {len(BOUNDS)} bounds")

@@ -7,8 +7,10 @@ per-test timeout), and the copy is restored. A bug counts as
 
 * **caught** when a test fails on an assertion (or ``pytest.fail``) and that test
   passes again once the bug is removed (checked);
-* **crash** when the first failure is an exception that is not an assertion: the bug
-  shows, but as an error a user would also see, not as a check of the right answer;
+* **crash** when the first failure is an exception raised in tether's code: the bug
+  shows, but as an error a user would also see, not as a check of the right answer
+  (an exception in the test's own code, such as a summary key it looks up that is
+  gone, is the test noticing the bug: caught);
 * **hang** when a test is stopped by the per-test timeout;
 * **survived** when every named test passes.
 
@@ -28,6 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -113,30 +116,56 @@ def run_pytest(repo: Path, cache: Path, tests: list[str], timeout_s: float) -> t
     return code, report
 
 
-def first_failure(report: Path) -> tuple[str, str, str] | None:
-    """``(test id, kind, first message line)`` of the first failing test in the report."""
+#: the last line of a pytest traceback: ``path:line: ExceptionType``
+_RAISED_AT = re.compile(r"^(\S+?):\d+: (\w[\w.]*)$")
+
+
+@dataclass
+class Failure:
+    test: str  # the test id
+    tag: str  # failure (the test's call) or error (its set-up or tear-down)
+    message: str  # the first line of the message
+    raised_in: str  # the file the exception was raised in ("" if unknown)
+
+
+def first_failure(report: Path) -> Failure | None:
+    """The first failing test of a JUnit XML report."""
     if not report.is_file():
         return None
     for case in ET.parse(report).getroot().iter("testcase"):
         for tag in ("failure", "error"):
             node = case.find(tag)
-            if node is not None:
-                name = f"{case.get('classname', '').replace('.', '/')}.py::{case.get('name')}"
-                message = (node.get("message") or node.text or "").strip().splitlines()
-                return name, tag, message[0][:160] if message else ""
+            if node is None:
+                continue
+            name = f"{case.get('classname', '').replace('.', '/')}.py::{case.get('name')}"
+            message = (node.get("message") or node.text or "").strip().splitlines()
+            raised = ""
+            for line in reversed((node.text or "").strip().splitlines()):
+                match = _RAISED_AT.match(line.strip())
+                if match:
+                    raised = match.group(1)
+                    break
+            return Failure(name, tag, message[0][:160] if message else "", raised)
     return None
 
 
-def verdict_of(code: int, failure: tuple[str, str, str] | None) -> tuple[str, str, str]:
+def verdict_of(code: int, failure: Failure | None) -> tuple[str, str, str]:
+    """``(verdict, test, detail)`` of one planted bug (see the module docstring).
+
+    An exception raised in the tests' own code (a summary key the test looks up is gone)
+    is the test noticing the bug; one raised in tether's code is a crash.
+    """
     if code == 0:
         return "survived", "", ""
     if code == -1 or failure is None:
         return "hang" if code == -1 else "crash", "", f"pytest exit code {code}"
-    test, tag, line = failure
+    line = failure.message
     if "Timeout" in line and line.startswith("Failed"):
-        return "hang", test, line
-    assertion = tag == "failure" and line.startswith(("AssertionError", "assert", "Failed:"))
-    return ("caught" if assertion else "crash"), test, line
+        return "hang", failure.test, line
+    assertion = line.startswith(("AssertionError", "assert", "Failed:"))
+    in_test = failure.raised_in.startswith("tests/")
+    caught = failure.tag == "failure" and (assertion or in_test)
+    return ("caught" if caught else "crash"), failure.test, line
 
 
 def plant(repo: Path, cache: Path, bug: Bug, timeout_s: float) -> Outcome:
