@@ -119,7 +119,7 @@ def wide_aliases(references: int) -> str:
 
 
 def test_the_alias_bound_counts_every_value_of_the_expanded_document():
-    assert 1 + 999 * 1001 == MAX_YAML_VALUES  # 999 aliases fit exactly, 1,000 do not
+    assert MAX_YAML_VALUES == 1 + 999 * 1001  # 999 aliases fit exactly, 1,000 do not
     assert len(parse_yaml(wide_aliases(999), "s.yaml")["b"]) == 999
     with pytest.raises(ScenarioError, match="s.yaml: b: YAML aliases expand to more than"):
         parse_yaml(wide_aliases(1000), "s.yaml")
