@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import sys
+import types
+
 import numpy as np
 import pytest
 
-from _parameter_runs import SILENT, changed, ran
+from _parameter_runs import SILENT, changed, leader_circle, ran
 from _parameters import effect
 
 #: ten robots scattered, noisy sensing (the paper's kind of setting), 40 steps
@@ -72,8 +75,11 @@ def test_the_leader_follows_the_waypoints() -> None:
 
 
 @effect("silent:trajectory.function", "silent:trajectory.kind")
-def test_a_function_of_time_leads() -> None:
-    path = {"kind": "function", "function": "_parameter_runs:leader_circle"}
+def test_a_function_of_time_leads(monkeypatch: pytest.MonkeyPatch) -> None:
+    user_module = types.ModuleType("leader_paths")  # a module the user has loaded
+    user_module.leader_circle = leader_circle
+    monkeypatch.setitem(sys.modules, "leader_paths", user_module)
+    path = {"kind": "function", "function": "leader_paths:leader_circle"}
     pts = {"kind": "positions", "positions": [[10, 0], [4, 0], [10, 6], [4, 6]]}
     r = ran(changed(SILENT, team__n_robots=4, team__init=pts, strategy__params__trajectory=path), 5)
     leader = r.built.strategy.leader
