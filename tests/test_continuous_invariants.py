@@ -29,6 +29,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from tether import jit
+from tether.continuous.dynamics import IntegratorParams, integrate
 from tether.continuous.params import ConnectivityParams
 from tether.continuous.placement import safe_team
 from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
@@ -201,8 +202,6 @@ class _Constant:
 
 def test_enforce_rejects_a_round_off_lambda2_and_detect_counts_it() -> None:
     """A candidate whose lambda2 is positive only at round-off level left the safe set."""
-    from tether.continuous.dynamics import IntegratorParams, integrate
-
     q, v = np.zeros((3, 2)), np.zeros((3, 2))
     params = IntegratorParams(guard="enforce", max_retries=3)
     q1, v1, ev, stats = integrate(q, v, 0.1, _Constant(), params, lambda2_min=0.0)
@@ -213,3 +212,13 @@ def test_enforce_rejects_a_round_off_lambda2_and_detect_counts_it() -> None:
     q1, v1, ev, stats = integrate(q, v, 0.1, _Constant(), params, lambda2_min=0.0)
     assert stats.guard_interventions == 0 and stats.safe_set_exits == stats.substeps >= 1
     np.testing.assert_allclose(v1, 0.1 / (1 + 0.1 * 2.0))  # one step: nothing vetoed
+
+
+def test_a_stalled_team_under_enforce_brakes_to_rest() -> None:
+    """Moving robots whose every candidate step leaves the safe set stop where they are."""
+    q, v = np.zeros((3, 2)), np.array([[1.0, 0.0], [0.0, -2.0], [0.5, 0.5]])
+    params = IntegratorParams(guard="enforce", max_retries=3)
+    q1, v1, _, stats = integrate(q, v, 0.1, _Constant(), params, lambda2_min=0.0)
+    assert stats.stalls == 1
+    np.testing.assert_array_equal(q1, q)
+    np.testing.assert_array_equal(v1, 0.0)

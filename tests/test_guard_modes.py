@@ -9,15 +9,19 @@ nothing, and none of them may call a run with an exit or an intervention a succe
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from tether.config import load_scenario
+from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
 from tether.continuous.weights import WeightedGraph
 from tether.errors import ScenarioError
 from tether.record import TrajectoryRecorder
 from tether.runner import build
-from tether.sim import simulate
+from tether.sim import StepContext, TeamState, simulate
+from tether.world.scenes import make_scene
 
 
 def run(guard: str, steps: int, eigensolver: str = "estimator") -> tuple[dict, np.ndarray, dict]:
@@ -92,3 +96,25 @@ def test_the_sweep_report_counts_the_controller_s_successes_per_combination(tmp_
     estimator = next(v for k, v in rows.items() if "estimator" in k)
     assert exact[:4] == ["1", "1", "0", "0"] and estimator[:4] == ["1", "0", "1", "0"]
     assert estimator[4] == "1"  # the trial with safe-set exits
+
+
+def test_a_run_whose_step_rule_gave_up_is_not_a_success() -> None:
+    """A stretched chain near the barrier needs rejected sub-steps; with no retry allowed
+    the step rule gives up (``tolerance_misses``), and the run is no success even though
+    the guard never acted and the team never left the safe set."""
+    q = np.zeros((6, 3))
+    q[:, 0], q[:, 2] = np.arange(6) * 5.5, 20.0  # links near Rs: lambda2 near the barrier
+    outcomes = {}
+    for retries in (30, 0):
+        world, rng = make_scene("free", 0, dim=3), np.random.default_rng(0)
+        strategy = ConnectivityStrategy(ConnectivityStrategyParams(preset="outdoor"))
+        strategy.reset(world, TeamState.at_rest(q), rng)
+        strategy.integ = dataclasses.replace(strategy.integ, max_retries=retries)
+        state = TeamState.at_rest(q)
+        for k in range(10):
+            state = strategy.step(StepContext(k, k * 0.1, 0.1, world, state, None, rng))
+        outcomes[retries] = strategy.metrics()
+    assert outcomes[30]["tolerance_misses"] == 0 and outcomes[30]["controller_success"] is True
+    m = outcomes[0]
+    assert m["tolerance_misses"] > 0 and m["guard_interventions"] == m["safe_set_exits"] == 0
+    assert m["controller_success"] is False

@@ -54,6 +54,17 @@ def test_ties_go_to_the_lower_index() -> None:
     assert run_until_prime(Election(n, layer), chain(n), candidate, crit)[0] == 3
 
 
+def test_a_tie_heard_later_from_a_higher_index_does_not_win() -> None:
+    """Host 3 of a row of 7 hears candidate 1 (two hops) before candidate 6 (three hops),
+    both with the same criterion: the lower index keeps the election."""
+    n = 7
+    crit = np.full(n, 5.0)
+    candidate = np.zeros(n, dtype=bool)
+    candidate[[1, 6]] = True
+    layer = MessageLayer(n, CommParams(), np.random.default_rng(0))
+    assert run_until_prime(Election(n, layer, host=3), chain(n), candidate, crit)[0] == 1
+
+
 def test_a_winner_that_is_no_longer_a_traveler_declines_and_a_new_election_follows() -> None:
     n = 6
     layer = MessageLayer(n, CommParams(), np.random.default_rng(0))

@@ -116,7 +116,9 @@ def test_the_criterion_elects_the_shortest_path_or_the_nearest_target(tmp_path) 
 
 def first_prime_step(**params: Any) -> int:
     prime = columns(run(scenario("multi_target", **params), 40))["prime"]
-    return int(np.flatnonzero(prime >= 0)[0])
+    elected = np.flatnonzero(prime >= 0)
+    assert len(elected), f"no prime elected in 40 steps with {params}"
+    return int(elected[0])
 
 
 @effect("multi_target:messages.rounds_per_step")

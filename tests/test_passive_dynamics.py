@@ -69,3 +69,24 @@ def test_a_passive_team_released_near_the_barrier_never_gains_energy(seed: int) 
     m = strategy.metrics()
     assert m["controller_success"] and m["safe_set_exits"] == 0
     assert m["max_speed_mps"] <= m["speed_bound_mps"]
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_the_reported_energy_terms_balance_the_team_s_energy(seed: int) -> None:
+    """``energy_net_j`` is what the integrator made or lost: with no external force and
+    no linear damping (only the speed-limiting damping, whose work the run reports as
+    ``speed_limit_work_j``), ``E_end - E_start = energy_net_j - speed_limit_work_j``,
+    ``E`` computed here from the configurations."""
+    world = make_scene("free", seed, dim=3)
+    params = ConnectivityStrategyParams(preset="outdoor", damping_ns_per_m=0.0)
+    strategy = ConnectivityStrategy(params)
+    q, v = stretched_team(seed)
+    rng = np.random.default_rng(seed)
+    strategy.reset(world, TeamState(q, v), rng)
+    e0, state = energy(strategy, q, v), TeamState(q, v)
+    for k in range(20):
+        state = strategy.step(StepContext(k, k * DT_S, DT_S, world, state, None, rng))
+    change = energy(strategy, state.positions, state.velocities) - e0
+    m = strategy.metrics()
+    assert m["speed_limit_work_j"] > 0.5 * e0  # the speed bound took most of the energy
+    assert m["energy_net_j"] - m["speed_limit_work_j"] == pytest.approx(change, rel=1e-9)

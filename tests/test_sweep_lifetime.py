@@ -137,9 +137,13 @@ def test_leftovers_of_killed_trials_are_removed_and_nothing_else(tmp_path, capsy
     (combo / ".seed-0.old-xyz").mkdir()
     (out / ".sweep.parquet.k2j3.tmp").write_bytes(b"half")
     (out / "notes.md").write_text("mine")  # the user's: stays
+    (out / ".ipynb_checkpoints").mkdir()  # the user's hidden folders: stay
+    (combo / ".notes").mkdir()
+    (combo / ".notes" / "todo.txt").write_text("mine")
     code, stdout, err = tether(capsys, *args)
     assert code == 0, err
     assert "(2 already done)" in stdout
     hidden = {p.name for p in out.rglob(".*")}
-    assert hidden == {".tether-sweep.lock", ".tether-run.json"}
+    assert hidden == {".tether-sweep.lock", ".tether-run.json", ".ipynb_checkpoints", ".notes"}
     assert (out / "notes.md").read_text() == "mine"
+    assert (combo / ".notes" / "todo.txt").read_text() == "mine"

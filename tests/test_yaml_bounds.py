@@ -19,7 +19,7 @@ from PIL import Image
 from _cli import one_error_line, tether
 from tether.config import load_scenario
 from tether.errors import MapError, ScenarioError
-from tether.yamlfile import MAX_YAML_BYTES, MAX_YAML_DEPTH, parse_yaml, read_yaml
+from tether.yamlfile import MAX_YAML_BYTES, MAX_YAML_DEPTH, MAX_YAML_VALUES, parse_yaml, read_yaml
 
 BOMB = "\n".join(
     ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
@@ -110,6 +110,19 @@ def test_an_oversized_map_yaml_is_refused_before_it_is_read(tmp_path, monkeypatc
 def test_scenario_yaml_is_bounded_and_strict(text, needle):
     with pytest.raises(ScenarioError, match=needle):
         parse_yaml(text, "s.yaml")
+
+
+def wide_aliases(references: int) -> str:
+    """A list of 1,000 values, and a list of ``references`` aliases to it: each alias is
+    1,001 values once expanded (the list and its items), no one of them near the bound."""
+    return "a: &a [" + ", ".join(["x"] * 1000) + "]\nb: [" + ", ".join(["*a"] * references) + "]\n"
+
+
+def test_the_alias_bound_counts_every_value_of_the_expanded_document():
+    assert MAX_YAML_VALUES == 1 + 999 * 1001  # 999 aliases fit exactly, 1,000 do not
+    assert len(parse_yaml(wide_aliases(999), "s.yaml")["b"]) == 999
+    with pytest.raises(ScenarioError, match="s.yaml: b: YAML aliases expand to more than"):
+        parse_yaml(wide_aliases(1000), "s.yaml")
 
 
 def test_plain_tags_are_read_and_dates_stay_text():

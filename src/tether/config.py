@@ -237,9 +237,18 @@ class Scenario(_Strict):
         if p.is_absolute():
             return p
         beside = self._base_dir / p
-        if beside.exists() or not p.exists():
+        if _exists(beside) or not _exists(p):
             return beside
         return p.resolve()
+
+
+def _exists(path: Path) -> bool:
+    """``path.exists()``, False for a path the file system cannot take (a name too long, a
+    NUL byte): the caller that needs the file says why in one line."""
+    try:
+        return path.exists()
+    except (OSError, ValueError):
+        return False
 
 
 def _loc(loc: tuple[Any, ...]) -> str:
