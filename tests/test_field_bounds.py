@@ -40,6 +40,9 @@ STRATEGY_SCENARIOS = {
     "multi_target": "multi_target_empty",
     "recurrent": "recurrent_demo",
     "utility": "recurrent_demo",
+    "unconstrained": "mission_unconstrained",
+    "silent_exploration": "mission_silent",
+    "continuous_exploration": "mission_continuous",
 }
 
 
