@@ -10,6 +10,7 @@ plotly: see ``docs/how-to/viewing.md``.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import html
 import http.server
@@ -162,7 +163,9 @@ class _OneFileHandler(http.server.BaseHTTPRequestHandler):
         self.send_header("Content-Type", "text/html; charset=utf-8")
         self.send_header("Content-Length", str(len(self.body)))
         self.end_headers()
-        self.wfile.write(self.body)
+        # a browser that leaves mid-reply is its choice, not an error of the server
+        with contextlib.suppress(BrokenPipeError, ConnectionResetError):
+            self.wfile.write(self.body)
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002
         pass
