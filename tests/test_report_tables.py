@@ -138,6 +138,15 @@ def test_paper_report_from_the_campaigns_sweeps(tmp_path: Path, capsys) -> None:
                             "--out", str(tmp_path / "paper"))  # fmt: skip
     one_error_line(code, err, "recurrent_fig5.png: is a symbolic link")
     assert mine.read_bytes() == b"the user's own file" and link.is_symlink()
+    # a report of the user's own in the folder is never replaced
+    theirs = tmp_path / "notes"
+    theirs.mkdir()
+    (theirs / "recurrent_paper.md").write_text("# My notes on the paper\n")
+    code, out, err = tether(capsys, "report", *map(str, folders), "--paper", "recurrent",
+                            "--out", str(theirs))  # fmt: skip
+    one_error_line(code, err, "tether did not write")
+    assert (theirs / "recurrent_paper.md").read_text() == "# My notes on the paper\n"
+    assert not (theirs / "figures").exists()
 
 
 def test_paper_report_refuses_what_it_cannot_use(tmp_path: Path, capsys) -> None:

@@ -49,6 +49,7 @@ __all__ = ["PAPERS", "campaign_kind", "index_runs", "write_paper_report"]
 #: the papers ``tether report --paper`` knows
 PAPERS = ("recurrent",)
 REPORT, NUMBERS = "recurrent_paper.md", "recurrent_paper.json"
+_TITLE = "# The recurrent-connectivity paper's Figs. 4-6"
 
 
 def campaign_kind(results: SweepResults) -> str:
@@ -295,13 +296,14 @@ def write_paper_report(
             f"{', '.join(map(str, sweep_dirs))}: no finished trial; run the sweeps first"
         )
     out = Path(out_dir) if out_dir is not None else Path(sweep_dirs[0])
+    _refuse_foreign(out)
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
     drawn = _fig4(index, figures) + _fig5_6(index, figures)
     write_json(out / NUMBERS, _numbers(index, folders))
     when = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
     lines = [
-        "# The recurrent-connectivity paper's Figs. 4-6",
+        _TITLE,
         "",
         f"Made by `{command or 'tether report --paper recurrent'}` on {when} from "
         + ", ".join(f"`{folders[k]}` ({CAMPAIGNS[k]})" for k in folders)
@@ -313,6 +315,25 @@ def write_paper_report(
     text = "\n".join(lines)
     atomic_write(out / REPORT, lambda tmp: Path(tmp).write_text(text))
     return out / REPORT
+
+
+def _refuse_foreign(out: Path) -> None:
+    """Refuse to replace a ``recurrent_paper.md`` or ``.json`` that this report did not write."""
+    report, numbers = out / REPORT, out / NUMBERS
+    ours = True
+    if report.is_file():
+        with open(report, encoding="utf-8", errors="replace") as fh:
+            ours = fh.readline().startswith(_TITLE)
+    if ours and numbers.is_file():
+        try:
+            ours = "campaigns" in json.loads(numbers.read_text())
+        except (OSError, ValueError, TypeError):
+            ours = False
+    if not ours:
+        raise TetherError(
+            f"{out}: holds a {REPORT} or {NUMBERS} that tether did not write; give another "
+            "--out (nothing was written)"
+        )
 
 
 if __name__ == "__main__":  # not a command: say which one makes the report
