@@ -24,6 +24,18 @@ from tether.registry import STRATEGIES
 #: key -> the tests that show its effect (filled by :func:`effect` at import)
 EFFECTS: dict[str, list[str]] = {}
 
+#: a built-in scenario of each built-in strategy, the base its parameters are changed on
+STRATEGY_SCENARIOS: dict[str, str] = {
+    "silent": "silent_demo",
+    "connectivity": "connectivity_empty",
+    "multi_target": "multi_target_empty",
+    "recurrent": "recurrent_demo",
+    "utility": "recurrent_demo",
+    "unconstrained": "mission_unconstrained",
+    "silent_exploration": "mission_silent",
+    "continuous_exploration": "mission_continuous",
+}
+
 #: parameters whose value cannot change what a run does, and why
 NO_EFFECT: dict[str, str] = {
     "description": "free text about the scenario; nothing reads it but the scenario.yaml copy",

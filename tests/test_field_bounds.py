@@ -26,24 +26,12 @@ import annotated_types as at
 import pytest
 from pydantic import BaseModel
 
-from _parameters import _models_in
+from _parameters import STRATEGY_SCENARIOS, _models_in
 from tether.config import Scenario, load_scenario, scenario_from_dict, set_dotted
 from tether.errors import ScenarioError
 from tether.plugins import BUILTINS
 from tether.registry import STRATEGIES
 from tether.runner import strategy_params
-
-#: a built-in scenario of each strategy, whose strategy parameters are pushed out of bounds
-STRATEGY_SCENARIOS = {
-    "silent": "silent_demo",
-    "connectivity": "connectivity_empty",
-    "multi_target": "multi_target_empty",
-    "recurrent": "recurrent_demo",
-    "utility": "recurrent_demo",
-    "unconstrained": "mission_unconstrained",
-    "silent_exploration": "mission_silent",
-    "continuous_exploration": "mission_continuous",
-}
 
 
 @dataclass(frozen=True)

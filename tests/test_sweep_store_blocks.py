@@ -16,25 +16,13 @@ from typing import Any
 import pytest
 
 from _parameter_runs import SILENT, changed
-from _parameters import model_fields
+from _parameters import STRATEGY_SCENARIOS, model_fields
 from tether.config import Scenario, load_scenario, scenario_from_dict, set_dotted
 from tether.errors import OutputError
 from tether.experiments.store import UNHASHED, open_store, scenario_hash
 from tether.plugins import BUILTINS
 from tether.registry import STRATEGIES
 from tether.runner import run
-
-#: a built-in scenario of each strategy (its strategy parameters are changed one by one)
-STRATEGY_SCENARIOS = {
-    "silent": "silent_demo",
-    "connectivity": "connectivity_empty",
-    "multi_target": "multi_target_empty",
-    "recurrent": "recurrent_demo",
-    "utility": "recurrent_demo",
-    "unconstrained": "mission_unconstrained",
-    "silent_exploration": "mission_silent",
-    "continuous_exploration": "mission_continuous",
-}
 
 #: one valid change per top-level block (for the real refusal)
 BLOCK_CHANGES: dict[str, dict[str, Any]] = {
