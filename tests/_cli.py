@@ -2,6 +2,13 @@
 
 from __future__ import annotations
 
+import os
+import pty
+import re
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
 
 from tether import cli
@@ -44,3 +51,26 @@ def listed(out: str) -> dict[str, list[str]]:
         elif line.startswith("  ") and current is not None and line.strip():
             sections[current].append(line.split()[0])
     return sections
+
+
+def on_terminal(code: str, args: list[str], cwd: Path) -> tuple[int, str]:
+    """Exit code and screen text (colours and cursor moves removed) of ``python -c CODE
+    ARGS`` run in a pseudo-terminal, as a user sees a command."""
+    parent, child = pty.openpty()
+    env = dict(os.environ, TERM="xterm", COLUMNS="120", TETHER_JIT="0")
+    proc = subprocess.Popen([sys.executable, "-c", code, *args], cwd=cwd, env=env,
+                            stdin=child, stdout=child, stderr=child)  # fmt: skip
+    os.close(child)
+    chunks = []
+    while True:
+        try:
+            data = os.read(parent, 4096)
+        except OSError:  # the terminal closed: the command ended
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(parent)
+    code_ = proc.wait(timeout=120)
+    screen = b"".join(chunks).decode(errors="replace")
+    return code_, re.sub(r"\x1b\[[0-9;?]*[a-zA-Z]", "", screen)

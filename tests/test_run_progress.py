@@ -3,14 +3,10 @@ every tenth of the way elsewhere, nothing with --quiet."""
 
 from __future__ import annotations
 
-import os
-import pty
 import re
-import subprocess
-import sys
 from pathlib import Path
 
-from _cli import tether
+from _cli import on_terminal, tether
 from tether.progress import StepProgress
 from tether.runner import run
 
@@ -49,24 +45,8 @@ def test_run_draws_a_bar_with_the_time_left_on_a_terminal(tmp_path: Path) -> Non
     """In a pseudo-terminal, as a user sees it: the bar, no plain lines."""
     code = "import sys; from tether.cli import main; sys.argv[0] = 'tether'; main()"
     args = ["run", "silent_demo", "--set", "sim.max_steps=200", "--no-figures", "--out", "r"]
-    parent, child = pty.openpty()
-    env = dict(os.environ, TERM="xterm", COLUMNS="120", TETHER_JIT="0")
-    proc = subprocess.Popen([sys.executable, "-c", code, *args], cwd=tmp_path, env=env,
-                            stdin=child, stdout=child, stderr=child)  # fmt: skip
-    os.close(child)
-    chunks = []
-    while True:
-        try:
-            data = os.read(parent, 4096)
-        except OSError:  # the terminal closed: the command ended
-            break
-        if not data:
-            break
-        chunks.append(data)
-    os.close(parent)
-    assert proc.wait(timeout=120) == 0
-    screen = b"".join(chunks).decode(errors="replace")
-    plain = re.sub(r"\x1b\[[0-9;?]*[a-zA-Z]", "", screen)  # without colours and cursor moves
+    returncode, plain = on_terminal(code, args, tmp_path)
+    assert returncode == 0
     assert re.search(r"steps .*\d+/200 elapsed \d+:\d\d:\d\d left", plain), plain[-800:]
     assert "step 20 of 200" not in plain
     assert "results: r" in plain

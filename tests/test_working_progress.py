@@ -9,17 +9,13 @@ what it is doing (bounded: a command that never says so fails the test, it does 
 
 from __future__ import annotations
 
-import os
-import pty
 import re
-import subprocess
-import sys
 import threading
 from pathlib import Path
 
 import pytest
 
-from _cli import tether
+from _cli import on_terminal, tether
 from tether import cli, progress, runner
 from tether.progress import Working
 
@@ -127,23 +123,8 @@ main()
 def test_a_spinner_with_the_time_on_a_terminal(tmp_path: Path) -> None:
     """In a pseudo-terminal, as a user sees it: the spinner, no plain line."""
     args = ["run", "silent_demo", "--set", "sim.max_steps=3", "--no-figures", "--out", "r"]
-    parent, child = pty.openpty()
-    env = dict(os.environ, TERM="xterm", COLUMNS="120", TETHER_JIT="0")
-    proc = subprocess.Popen([sys.executable, "-c", SLOW_RUN, *args], cwd=tmp_path, env=env,
-                            stdin=child, stdout=child, stderr=child)  # fmt: skip
-    os.close(child)
-    chunks = []
-    while True:
-        try:
-            data = os.read(parent, 4096)
-        except OSError:  # the terminal closed: the command ended
-            break
-        if not data:
-            break
-        chunks.append(data)
-    os.close(parent)
-    assert proc.wait(timeout=120) == 0
-    plain = re.sub(r"\x1b\[[0-9;?]*[a-zA-Z]", "", b"".join(chunks).decode(errors="replace"))
+    returncode, plain = on_terminal(SLOW_RUN, args, tmp_path)
+    assert returncode == 0
     assert re.search(r"building the world and placing 12 robots \(\d+ s\)", plain), plain[-800:]
     assert "placing 12 robots ..." not in plain
     assert "results: r" in plain
