@@ -1,8 +1,9 @@
-"""The exact Steiner tree on SteinLib's B instances: the published optimum, every time.
+"""The exact Steiner tree on SteinLib's instances: the published optimum, every time.
 
-The 18 instances of ``tests/data/steinlib`` (J. E. Beasley's set B; see the README
-there) are read with :func:`tether.graph.steinlib.read_stp`. Instances with at most
-:data:`MAX_TERMINALS` terminals are solved by
+The instances of ``tests/data/steinlib`` (J. E. Beasley's set B, four of his set C and
+C. Lin's ``lin01``; see the README there) are read with
+:func:`tether.graph.steinlib.read_stp`. Instances with at most :data:`MAX_TERMINALS`
+terminals are solved by
 :func:`tether.recurrent.planning.steiner.steiner_tree` with the reference path and, if
 numba is installed, with the compiled kernel; Dreyfus-Wagner's ``3^k`` work makes the
 17-terminal ones take seconds even compiled (the benchmark suite's ``steiner_scaling``
@@ -25,7 +26,7 @@ from tether.recurrent.planning.steiner import steiner_tree
 
 DATA = Path(__file__).parent / "data" / "steinlib"
 
-#: name: (nodes, edges, terminals, optimum), from SteinLib's table of set B
+#: name: (nodes, edges, terminals, optimum), from SteinLib's tables of sets B, C and LIN
 B = {
     "b01": (50, 63, 9, 82),
     "b02": (50, 63, 13, 83),
@@ -45,12 +46,17 @@ B = {
     "b16": (100, 200, 17, 127),
     "b17": (100, 200, 25, 131),
     "b18": (100, 200, 50, 218),
+    "c01": (500, 625, 5, 85),
+    "c02": (500, 625, 10, 144),
+    "c06": (500, 1000, 5, 55),
+    "c07": (500, 1000, 10, 102),
+    "lin01": (53, 80, 4, 503),
 }
 
 #: the exact solver runs on instances with at most this many terminals: b01, b02, b04,
-#: b05, b07, b10, a fraction of a second each; the next size, 17 terminals, takes
-#: seconds compiled and more with the reference path (the steiner_scaling row of
-#: python benchmarks/run.py)
+#: b05, b07, b10, the C and LIN instances, a fraction of a second each; the next size,
+#: 17 terminals, takes seconds compiled and more with the reference path (the
+#: steiner_scaling row of python benchmarks/run.py)
 MAX_TERMINALS = 13
 
 SOLVED = [name for name, (_, _, k, _) in B.items() if k <= MAX_TERMINALS]
@@ -59,7 +65,7 @@ MODES = [False, True] if jit.available() else [False]
 
 def test_every_instance_file_is_here_and_in_the_readme() -> None:
     assert sorted(p.stem for p in DATA.glob("*.stp")) == sorted(B)
-    rows = re.findall(r"^\| (b\d\d) \| (\d+) \| (\d+) \| (\d+) \| (\d+) \|$",
+    rows = re.findall(r"^\| ([a-z]+\d\d) \| (\d+) \| (\d+) \| (\d+) \| (\d+) \|$",
                       (DATA / "README.md").read_text(), flags=re.MULTILINE)  # fmt: skip
     assert {name: tuple(map(int, rest)) for name, *rest in rows} == B
 

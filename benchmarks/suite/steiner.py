@@ -47,7 +47,7 @@ def random_graphs(seed: int, count: int) -> list[tuple[int, nx.Graph, list[int]]
 def optima() -> dict[str, int]:
     """Instance name -> published optimum, from the table of the data folder's README."""
     text = (STEINLIB / "README.md").read_text()
-    rows = re.findall(r"^\| ([a-z]\d\d) \| \d+ \| \d+ \| \d+ \| (\d+) \|$", text, re.MULTILINE)
+    rows = re.findall(r"^\| ([a-z]+\d\d) \| \d+ \| \d+ \| \d+ \| (\d+) \|$", text, re.MULTILINE)
     return {name: int(opt) for name, opt in rows}
 
 
