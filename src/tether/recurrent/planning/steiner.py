@@ -29,6 +29,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from tether import jit
+from tether.recurrent.planning.steiner_reduce import reduce_instance
 
 __all__ = ["MAX_TABLE_BYTES", "SteinerTree", "steiner_tree", "table_bytes"]
 
@@ -105,10 +106,11 @@ def steiner_tree(
         tree.add_nodes_from((t, graph.nodes[t]) for t in terms)
         return SteinerTree(0.0, tree)
     # Only the component holding the terminals matters.
-    comp = nx.node_connected_component(graph, terms[0])
-    if any(t not in comp for t in terms):
-        raise nx.NetworkXNoPath("the terminals are not connected in the graph")
-    nodes = list(comp)
+    nodes = _component(graph, terms[0])
+    if len(nodes) < len(graph):
+        comp = set(nodes)
+        if any(t not in comp for t in terms):
+            raise nx.NetworkXNoPath("the terminals are not connected in the graph")
     need = table_bytes(len(terms), len(nodes))
     if need > MAX_TABLE_BYTES:
         raise ValueError(
@@ -119,51 +121,69 @@ def steiner_tree(
             "(networkx.algorithms.approximation.steiner_tree)"
         )
     index = {v: i for i, v in enumerate(nodes)}
-    if jit.enabled():  # compiled Dreyfus-Wagner with Dijkstra relaxations, same optimum
-        return _steiner_tree_kernel(graph, nodes, index, terms, weight)
-    rows, cols, vals = [], [], []
-    for u, v, data in graph.subgraph(nodes).edges(data=True):
-        if u == v:
-            continue
-        w = float(data.get(weight, 1.0))
-        if w < 0 or not np.isfinite(w):
-            raise ValueError(f"edge ({u!r}, {v!r}) has invalid weight {w}")
-        rows.append(index[u])
-        cols.append(index[v])
-        vals.append(w)
-    dist, pred = all_pairs(len(nodes), rows, cols, vals)
-    term_idx = [index[t] for t in terms]
-    cost, edges = dreyfus_wagner(dist, pred, term_idx)
-    tree = _as_tree(graph, [(nodes[a], nodes[b]) for a, b in edges], terms, weight)
-    return SteinerTree(float(cost), tree)
-
-
-def _steiner_tree_kernel(
-    graph: nx.Graph, nodes: list, index: dict, terms: list, weight: str
-) -> SteinerTree:
-    """:func:`steiner_tree` on the component ``nodes`` by the compiled kernels."""
-    from tether.recurrent.planning.steiner_kernels import steiner_kernel, tree_edges
-
-    n = len(nodes)
     us, vs, ws = _edge_lists(graph, nodes, index, weight)
     w = np.array(ws, dtype=float)
     bad = (w < 0) | ~np.isfinite(w)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise ValueError(f"edge ({nodes[us[k]]!r}, {nodes[vs[k]]!r}) has invalid weight {ws[k]}")
-    ui, vi = np.array(us, dtype=np.int64), np.array(vs, dtype=np.int64)
-    src = np.concatenate([ui, vi])
-    dst = np.concatenate([vi, ui])
+    red = reduce_instance(len(nodes), us, vs, w.tolist(), [index[t] for t in terms])
+    cost, chosen = red.fixed_cost, list(red.fixed)
+    if len(red.terminals) > 1:
+        solve = _solve_kernel if jit.enabled() else _solve_reference
+        rest, pairs = solve(red.size, red.us, red.vs, red.ws, red.terminals)
+        edge_of = {}
+        for i, (a, b) in enumerate(zip(red.us.tolist(), red.vs.tolist(), strict=True)):
+            edge_of[a, b] = edge_of[b, a] = i
+        cost += rest
+        for a, b in pairs:
+            chosen.extend(red.paths[edge_of[a, b]])
+    edges = [(nodes[us[i]], nodes[vs[i]]) for i in chosen]
+    return SteinerTree(float(cost), _as_tree(graph, edges, terms, weight))
+
+
+def _solve_reference(
+    n: int, us: np.ndarray, vs: np.ndarray, ws: np.ndarray, terminals: list[int]
+) -> tuple[float, list[tuple[int, int]]]:
+    """Optimal tree of the terminals of a reduced graph by :func:`dreyfus_wagner` (numpy):
+    its cost and edges as vertex pairs."""
+    dist, pred = all_pairs(n, us, vs, ws)
+    return dreyfus_wagner(dist, pred, terminals)
+
+
+def _solve_kernel(
+    n: int, us: np.ndarray, vs: np.ndarray, ws: np.ndarray, terminals: list[int]
+) -> tuple[float, list[tuple[int, int]]]:
+    """:func:`_solve_reference` by the compiled kernels."""
+    from tether.recurrent.planning.steiner_kernels import steiner_kernel, tree_edges
+
+    src = np.concatenate([us, vs])
+    dst = np.concatenate([vs, us])
     order = np.argsort(src, kind="stable")
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
-    term_idx = np.array([index[t] for t in terms], dtype=np.int64)
-    cost, pred, split = steiner_kernel(indptr, dst[order], np.concatenate([w, w])[order], term_idx)
+    term_idx = np.array(terminals, dtype=np.int64)
+    weights = np.concatenate([ws, ws])[order]
+    cost, pred, split = steiner_kernel(indptr, dst[order], weights, term_idx)
     if not np.isfinite(cost):  # the terminals are connected: only a pruning bug gets here
         raise RuntimeError("steiner_kernel pruned every tree of the terminals")
-    edges = tree_edges(pred, split, int(term_idx[-1]), (1 << (len(terms) - 1)) - 1)
-    tree = _as_tree(graph, [(nodes[a], nodes[b]) for a, b in edges.tolist()], terms, weight)
-    return SteinerTree(float(cost), tree)
+    edges = tree_edges(pred, split, int(term_idx[-1]), (1 << (len(terminals) - 1)) - 1)
+    return float(cost), [(a, b) for a, b in edges.tolist()]
+
+
+def _component(graph: nx.Graph, start: Hashable) -> list:
+    """The vertices of ``start``'s connected component, in breadth-first order (a plain
+    search: networkx's ``node_connected_component`` pays for its dispatch on a
+    process's first call)."""
+    adj = graph.adj
+    seen = {start}
+    order = [start]
+    for v in order:
+        for x in adj[v]:
+            if x not in seen:
+                seen.add(x)
+                order.append(x)
+    return order
 
 
 def _edge_lists(
@@ -205,12 +225,15 @@ def all_pairs(
     zero-weight entries of sparse input, so zero costs are stored as a tiny
     positive value and the distances rounded back.
     """
+    rows_arr, cols_arr = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
     vals_arr = np.asarray(vals, dtype=float)
-    tiny = 1e-300
-    mat = sp.csr_matrix(
-        (np.where(vals_arr == 0, tiny, vals_arr), (np.asarray(rows), np.asarray(cols))),
-        shape=(n, n),
-    )
+    vals_arr = np.where(vals_arr == 0, 1e-300, vals_arr)  # tiny: scipy drops explicit zeros
+    # the CSR arrays directly (scipy's conversion from COO costs more than the search on
+    # small graphs); each edge in its first end's row, the search reads both directions
+    order = np.argsort(rows_arr, kind="stable")
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows_arr, minlength=n), out=indptr[1:])
+    mat = sp.csr_matrix((vals_arr[order], cols_arr[order], indptr), shape=(n, n))
     dist, pred = dijkstra(mat, directed=False, return_predecessors=True)
     dist[dist < 1e-200] = 0.0
     return dist, pred
@@ -334,7 +357,8 @@ def _spanning_tree(sub: nx.Graph, weight: str) -> nx.Graph:
     in the order it sorts them (by weight, stable), and that graph is made directly,
     without the union-find and networkx's dispatch.
     """
-    if sub.number_of_edges() != sub.number_of_nodes() - 1 or not nx.is_connected(sub):
+    n = sub.number_of_nodes()
+    if sub.number_of_edges() != n - 1 or (n and len(_component(sub, next(iter(sub)))) != n):
         return nx.minimum_spanning_tree(sub, weight=weight)
     tree = nx.Graph()
     tree.graph.update(sub.graph)
