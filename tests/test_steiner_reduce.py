@@ -13,7 +13,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.recurrent.planning.steiner import all_pairs, dreyfus_wagner
+from tether.recurrent.planning.steiner import all_pairs, dreyfus_wagner, sparse_dreyfus_wagner
 from tether.recurrent.planning.steiner_reduce import reduce_instance
 
 
@@ -73,6 +73,18 @@ def test_nearest_terminal_merges_two_terminals() -> None:
     assert sorted(red.ws.tolist()) == [1.0, 10.0, 10.0, 10.0, 10.0, 11.0]
 
 
+def test_zero_weight_edge_merges_its_ends() -> None:
+    """K4 plus a vertex 4 tied to 3 at no cost and to 0, 1 and 2: 3 and 4 become one
+    vertex, whose edge to each other vertex is the cheaper of the two."""
+    us, vs, ws = _k4({(0, 2): 5.0, (1, 3): 5.0, (3, 4): 0.0, (0, 4): 7.0, (1, 4): 11.0,
+                      (2, 4): 12.0})  # fmt: skip
+    red = reduce_instance(5, us, vs, ws, [0, 1])
+    assert red.size == 4 and red.fixed_cost == 0.0
+    assert [(us[i], vs[i]) for i in red.fixed] == [(3, 4)]
+    assert sorted(red.ws.tolist()) == [5.0, 5.0, 7.0, 10.0, 10.0, 10.0]
+    assert min(red.ws) > 0
+
+
 def test_one_terminal_left_means_nothing_else() -> None:
     red = reduce_instance(3, [0, 1], [1, 2], [2.0, 3.0], [0, 2])
     assert red.fixed_cost == 5.0 and red.size == 1 and len(red.us) == 0
@@ -108,7 +120,8 @@ def test_reduced_optimum_plus_fixed_edges_is_the_optimum(seed: int) -> None:
         rest, pairs = dreyfus_wagner(dist, pred, red.terminals)
     optimum = _plain_optimum(n, us, vs, ws, terminals)
     assert red.fixed_cost + rest == pytest.approx(optimum, abs=1e-9)
-    # the expanded edges: a connected subgraph of the input over the terminals, same cost
+    # the expanded edges: a subgraph of the input joining the terminals, of the same cost
+    # (a merged zero-weight edge may lie apart from them)
     edge_of = {frozenset((a, b)): i for i, (a, b) in enumerate(zip(red.us, red.vs, strict=True))}
     chosen = set(red.fixed)
     for a, b in pairs:
@@ -116,5 +129,27 @@ def test_reduced_optimum_plus_fixed_edges_is_the_optimum(seed: int) -> None:
     sub = nx.Graph()
     sub.add_nodes_from(terminals)
     sub.add_weighted_edges_from((us[i], vs[i], ws[i]) for i in chosen)
-    assert nx.is_connected(sub)
+    assert set(terminals) <= nx.node_connected_component(sub, terminals[0])
     assert sub.size(weight="weight") == pytest.approx(optimum, abs=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_sparse_programme_matches_the_dense_one(seed: int) -> None:
+    """``sparse_dreyfus_wagner`` (edge rounds, no distance table; the reference path on
+    reduced graphs) finds the dense programme's optimum, with a tree of that cost."""
+    rng = np.random.default_rng(500 + seed)
+    n = int(rng.integers(8, 40))
+    g = nx.connected_watts_strogatz_graph(n, 4, 0.4, seed=seed)
+    us, vs = (np.array(x, dtype=np.int64) for x in zip(*g.edges, strict=True))
+    ws = (
+        rng.integers(1, 9, size=len(us)).astype(float) if seed % 2 else rng.uniform(0.1, 4, len(us))
+    )
+    terminals = [int(t) for t in rng.choice(n, size=int(rng.integers(2, 8)), replace=False)]
+    cost, pairs = sparse_dreyfus_wagner(n, us, vs, ws, terminals)
+    assert cost == pytest.approx(_plain_optimum(n, us, vs, ws, terminals), abs=1e-9)
+    weight = {frozenset((int(a), int(b))): w for a, b, w in zip(us, vs, ws, strict=True)}
+    tree = nx.Graph()
+    tree.add_nodes_from(terminals)
+    tree.add_weighted_edges_from((a, b, weight[frozenset((a, b))]) for a, b in pairs)
+    assert set(terminals) <= nx.node_connected_component(tree, terminals[0])
+    assert tree.size(weight="weight") == pytest.approx(cost, abs=1e-9)

@@ -16,11 +16,19 @@ with ``O(3^k n + 2^k n^2)`` work for ``k`` terminals on ``n`` vertices (every
 step is a vectorised numpy min). The shared multi-subset variant used by the
 approximation algorithm lives in :mod:`tether.recurrent.planning.apx`; both reuse the
 reconstruction helper :func:`reconstruct_tree` below.
+
+:func:`steiner_tree` first shrinks the problem with the exact degree reductions of
+:mod:`tether.recurrent.planning.steiner_reduce` (fewer vertices, often fewer
+terminals), then runs the same recursion on what is left: compiled
+(:mod:`tether.recurrent.planning.steiner_kernels`) when :func:`tether.jit.enabled`,
+otherwise :func:`sparse_dreyfus_wagner`, the numpy variant that relaxes over the edge
+list instead of an ``n x n`` distance table.
 """
 
 from __future__ import annotations
 
 from collections.abc import Hashable, Iterable, Sequence
+from functools import lru_cache
 from typing import NamedTuple
 
 import networkx as nx
@@ -85,15 +93,18 @@ def steiner_tree(
 
     Notes
     -----
-    With :func:`tether.jit.enabled`, the compiled variant of
-    :mod:`tether.recurrent.planning.steiner_kernels` (Dijkstra relaxations instead of
-    all-pairs distances, ``O(3^k n + 2^k (m + n) log n)``) finds the same optimum.
-    The reference is Dreyfus-Wagner with ``O(3^k n + 2^k n^2 + n (m + n log n))`` time and
-    ``O(2^k n)`` memory for ``k`` terminals, ``n`` vertices, ``m`` edges: on the
-    SteinLib B instances (50-100 vertices) the compiled variant takes milliseconds for
-    up to 13 terminals and seconds for 19 (the ``steiner_scaling`` row of
-    ``python benchmarks/run.py``); each terminal more triples the work. Optimality is
-    exact (integer or float weights).
+    The degree reductions of :mod:`tether.recurrent.planning.steiner_reduce` run first;
+    the programme below runs on the reduced graph. With :func:`tether.jit.enabled`, the
+    compiled variant of :mod:`tether.recurrent.planning.steiner_kernels` (Dijkstra
+    relaxations, ``O(3^k n + 2^k (m + n) log n)``) finds the optimum; otherwise
+    :func:`sparse_dreyfus_wagner` (numpy, ``O(3^k n + 2^k m h)`` for ``h`` rounds) finds
+    the same one. Memory is ``O(2^k n)`` for ``k`` terminals, ``n`` vertices and ``m``
+    edges left after the reductions: on the SteinLib B instances (50-100 vertices) the
+    compiled variant takes milliseconds for up to 13 terminals and seconds for 19 (the
+    ``steiner_scaling`` row of ``python benchmarks/run.py``); each terminal more triples
+    the work. Optimality is exact (integer or float weights; with float weights the last
+    bits of the cost may differ between the two variants, sums being added in another
+    order).
     """
     if graph.is_directed():
         raise ValueError("steiner_tree needs an undirected graph")
@@ -145,10 +156,9 @@ def steiner_tree(
 def _solve_reference(
     n: int, us: np.ndarray, vs: np.ndarray, ws: np.ndarray, terminals: list[int]
 ) -> tuple[float, list[tuple[int, int]]]:
-    """Optimal tree of the terminals of a reduced graph by :func:`dreyfus_wagner` (numpy):
-    its cost and edges as vertex pairs."""
-    dist, pred = all_pairs(n, us, vs, ws)
-    return dreyfus_wagner(dist, pred, terminals)
+    """Optimal tree of the terminals of a reduced graph (positive weights) by
+    :func:`sparse_dreyfus_wagner` (numpy): its cost and edges as vertex pairs."""
+    return sparse_dreyfus_wagner(n, us, vs, ws, terminals)
 
 
 def _solve_kernel(
@@ -296,6 +306,87 @@ def dreyfus_wagner(
     return cost, edges
 
 
+def sparse_dreyfus_wagner(
+    n: int, us: np.ndarray, vs: np.ndarray, ws: np.ndarray, terminals: Sequence[int]
+) -> tuple[float, list[tuple[int, int]]]:
+    """Dreyfus-Wagner with numpy on the edges, without all-pairs distances.
+
+    The recursion of :func:`dreyfus_wagner` with every subset of one size done at once:
+    their merges (``2^(j-1) - 1`` parts per subset of ``j`` terminals, those holding its
+    lowest terminal) are one array operation, and their relaxations
+    ``dp[S][v] = min_u g[S][u] + d(u, v)`` are Bellman-Ford rounds over the edge list
+    for all of them together (each round a segment minimum over the arcs into every
+    vertex) until nothing improves: ``O(3^k n + 2^k m h)`` for ``h`` rounds (the most
+    edges on a shortest path), and no ``n x n`` table. Weights must be positive (the
+    reductions contract zero-weight edges), so the predecessors found afterwards, an arc
+    whose sum gives the label exactly, never form a cycle. Returns the cost and the tree
+    edges as vertex pairs.
+    """
+    k = len(terminals) - 1
+    full = (1 << k) - 1
+    src = np.concatenate([us, vs])
+    dst = np.concatenate([vs, us])
+    order = np.argsort(dst, kind="stable")
+    src, dst, w = src[order], dst[order], np.concatenate([ws, ws])[order]
+    starts = np.flatnonzero(np.r_[True, dst[1:] != dst[:-1]])  # every vertex has an arc
+    dp = np.full((1 << k, n), np.inf)
+    pred = np.full((1 << k, n), -1, dtype=np.intp)
+    split = np.zeros((1 << k, n), dtype=np.intp)
+    for j in range(1, k + 1):
+        subsets, parts = _level(k, j)
+        if j == 1:
+            labels = np.full((k, n), np.inf)
+            labels[np.arange(k), terminals[:-1]] = 0.0
+        else:
+            merged = dp[parts] + dp[subsets[:, None] ^ parts]  # (subsets, parts, n)
+            best = np.argmin(merged, axis=1)
+            labels = np.take_along_axis(merged, best[:, None, :], axis=1)[:, 0, :]
+            split[subsets] = np.take_along_axis(parts, best, axis=1)
+        start = labels.copy()
+        while True:
+            reach = np.minimum.reduceat(labels[:, src] + w, starts, axis=1)
+            better = reach < labels
+            if not better.any():
+                break
+            labels = np.where(better, reach, labels)
+        dp[subsets] = labels
+        sums = labels[:, src] + w
+        rows, arcs = np.nonzero((sums == labels[:, dst]) & (labels[:, dst] < start[:, dst]))
+        pred[subsets[rows], dst[arcs]] = src[arcs]
+    root = terminals[-1]
+    edges: list[tuple[int, int]] = []
+    stack = [(full, root)]
+    while stack:
+        s, v = stack.pop()
+        while pred[s, v] >= 0:
+            edges.append((int(pred[s, v]), v))
+            v = int(pred[s, v])
+        if s & (s - 1):
+            a = int(split[s, v])
+            stack.append((a, v))
+            stack.append((s ^ a, v))
+    return float(dp[full, root]), edges
+
+
+@lru_cache(maxsize=64)
+def _level(k: int, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """The subsets of ``j`` of ``k`` terminals (bit masks) and, per subset, its parts
+    holding its lowest bit (``(subsets, 2^(j-1) - 1)``)."""
+    subsets = [s for s in range(1 << k) if s.bit_count() == j]
+    parts = []
+    for s in subsets:
+        low = s & -s
+        rest = s ^ low
+        row, b = [], rest
+        while True:
+            b = (b - 1) & rest
+            row.append(low | b)
+            if b == 0:
+                break
+        parts.append(row)
+    return np.array(subsets, dtype=np.intp), np.array(parts, dtype=np.intp)
+
+
 def reconstruct_tree(pred, root, full, via_of, split_of) -> list[tuple[int, int]]:
     """Edges of the Dreyfus-Wagner tree for subset ``full`` hanging from ``root``.
 
@@ -332,7 +423,8 @@ def _path_edges(pred: np.ndarray, src: int, dst: int) -> list[tuple[int, int]]:
 def _as_tree(
     graph: nx.Graph, edges: list[tuple[Hashable, Hashable]], terminals: list, weight: str
 ) -> nx.Graph:
-    """Turn a union of shortest paths into a tree: MST of the union, then prune leaves."""
+    """Turn a union of shortest paths (and fixed edges, some of them in a part without
+    terminals when weights are zero) into a tree: MST of the union, then prune leaves."""
     sub = nx.Graph()
     sub.add_nodes_from((t, graph.nodes[t]) for t in terminals)
     for a, b in edges:
@@ -344,6 +436,8 @@ def _as_tree(
     leaves = [v for v in tree if tree.degree(v) <= 1 and v not in term]
     while leaves:
         v = leaves.pop()
+        if v not in tree:  # listed twice: both ends of a lone edge
+            continue
         nbrs = list(tree.neighbors(v))
         tree.remove_node(v)
         leaves.extend(u for u in nbrs if tree.degree(u) <= 1 and u not in term)

@@ -17,6 +17,9 @@ in graphs to optimality", Networks 32, 1998), applied until none applies:
   two edges stays;
 * **terminal of degree 1**: its edge is in every tree; it is fixed and the terminal
   merged into its neighbour, which becomes a terminal;
+* **edge of weight 0**: its ends become one vertex (a terminal if either was): a tree
+  of the merged graph plus that edge spans the same terminals at the same cost; the
+  reduced graph has positive weights only;
 * **nearest terminal**: when a terminal's cheapest edge leads to another terminal, some
   optimal tree has it (put it in any optimal tree and drop the other edge at the
   terminal on the cycle it closes, which is not cheaper); fixed, and the two terminals
@@ -143,6 +146,20 @@ def _degree_tests(g: _Graph, term: set[int], stack: list[int]) -> None:
             term.add(x)
 
 
+def _contract_zero_edges(g: _Graph, term: set[int]) -> None:
+    """Merge the ends of every zero-weight edge (a terminal if either end is one)."""
+    stack = list(range(len(g.adj)))
+    while stack and len(term) > 1:
+        v = stack.pop()
+        x = next((y for y, e in g.adj[v].items() if g.weight[e] == 0), None)
+        if x is not None:
+            g.contract(v, x)
+            if v in term:
+                term.discard(v)
+                term.add(x)
+            stack.append(x)
+
+
 def reduce_instance(
     n: int, us: Sequence[int], vs: Sequence[int], ws: Sequence[float], terminals: Sequence[int]
 ) -> Reduction:
@@ -160,6 +177,8 @@ def reduce_instance(
     """
     g = _Graph(n, us, vs, ws)
     term = set(terminals)
+    if 0.0 in g.weight:
+        _contract_zero_edges(g, term)
     _degree_tests(g, term, list(range(n)))
     joined = len(term) <= 1  # the fixed edges join every terminal: nothing else matters
     alive = sorted(term) if joined else [v for v in range(n) if g.adj[v] or v in term]
