@@ -5,7 +5,8 @@ for one (without sensing noise): the move of :mod:`tether.envs.plant`, the sense
 (range by :func:`~tether.graph.kernels.pairs_within_kernel`, line of sight on the grid by
 :func:`~tether.world.los_kernels.segment_free_kernel`, occlusion by robot bodies by
 :func:`~tether.sensing.robots_kernels.occluded_kernel`), components by union-find,
-lambda2 of the unweighted Laplacian (LAPACK ``dsyevd`` through ``eigvalsh``), the
+lambda2 of the unweighted Laplacian (LAPACK ``dsyevd`` through ``eigvalsh``; for two or
+three robots the exact value, the known spectrum of the path or the triangle), the
 bottleneck margin (Kruskal), close pairs, then the task (:mod:`.vector_tasks`), the
 observations and the rewards. Python is entered once per step for all copies, so small
 teams are not dominated by interpreter overhead.
@@ -122,7 +123,11 @@ def graph_terms(q, pairs, range_m, collision_m, terms):  # noqa: ANN001, ANN201
             longest = length[p]
     connected = comps <= 1
     lam = 0.0
-    if connected and n >= 2:
+    if connected and n == 2:  # one link: the spectrum of the path P2 is {0, 2}
+        lam = 2.0
+    elif connected and n == 3:  # the path P3 {0, 1, 3} (two links), the triangle {0, 3, 3}
+        lam = 1.0 if m == 2 else 3.0
+    elif connected and n >= 2:
         lap = np.zeros((n, n))
         for p in range(m):
             i, j = pairs[p, 0], pairs[p, 1]
