@@ -15,7 +15,9 @@ import pytest
 import tether.envs as te
 from tether.config import load_scenario
 from tether.envs.options import TERMS
+from tether.graph import is_connected
 from tether.runner import build
+from tether.sensing import sensed_pairs
 
 pytestmark = pytest.mark.timeout(900)  # the first call compiles the kernels (cold cache)
 
@@ -98,3 +100,31 @@ def test_vector_spaces_and_errors() -> None:
         te.vector_env("connectivity_empty", 0)
     with pytest.raises(ValueError, match="no vector form"):
         te.vector_env("recurrent_demo", 2)
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_lambda2_of_two_and_three_robots_is_the_laplacians(n: int) -> None:
+    """Teams of 2 and 3 robots take lambda2 from the path's and the triangle's spectra."""
+    data = noise_free("silent_demo")
+    data["team"]["n_robots"] = n
+    copies = 64
+    venv = te.vector_env(data, copies)
+    venv.reset(seed=0)
+    built = build(data, 0)
+    rng = np.random.default_rng(1)
+    lam = list(TERMS).index("lambda2")
+    seen = set()
+    for _ in range(6):  # small random moves: teams that are paths or triangles
+        *_, infos = venv.step(rng.uniform(-0.1, 0.1, venv.action_space.shape))
+        for e in range(copies):
+            pairs = sensed_pairs(venv.positions[e], built.sensor, built.world)
+            lap = np.zeros((n, n))
+            for i, j in pairs:
+                lap[[i, j], [j, i]] -= 1.0
+                lap[[i, j], [i, j]] += 1.0
+            linked = is_connected(n, pairs)
+            want = max(np.linalg.eigvalsh(lap)[1], 0.0) if linked else 0.0
+            assert infos["terms"][e, lam] == pytest.approx(want, abs=1e-12)
+            seen.add((linked, len(pairs)))
+    assert (True, n - 1) in seen  # one link, or the path of three
+    assert n == 2 or (True, 3) in seen  # the triangle

@@ -124,6 +124,18 @@ def warm() -> bool:
     return enabled() and "numba" in sys.modules
 
 
+def allowed() -> bool:
+    """The kernels may run: not switched off (``TETHER_JIT=0``, :func:`set_enabled`).
+
+    For code that runs compiled anyway (the vector environment steps in numba), where
+    the ``auto`` mode's wait would save no start-up: its own kernels run at once unless
+    switched off, and its reference paths run when they are.
+    """
+    if _forced is not None:
+        return _forced
+    return mode() != "off"
+
+
 def set_enabled(value: bool | None) -> None:
     """Force the kernels on (``True``) or off (``False``); ``None`` restores ``TETHER_JIT``."""
     global _forced

@@ -12,7 +12,8 @@ from tether.graph import is_connected, pairs_within
 from tether.world.world import World
 
 
-def _default_center(world: World) -> np.ndarray:
+def default_center(world: World) -> np.ndarray:
+    """Where a team is placed when ``team.init.center`` is not given."""
     if world.bounds_m is not None:
         return world.bounds_m.mean(axis=0)
     return np.zeros(world.dim)
@@ -49,7 +50,7 @@ def random_connected(
     ``n * (max_tries + 1)`` candidates.
     """
     dim = world.dim
-    center = _default_center(world) if center is None else np.asarray(center, dtype=float)
+    center = default_center(world) if center is None else np.asarray(center, dtype=float)
     if not np.isfinite(center).all():
         raise ValueError("center: must be finite")
     if not world.points_free(center[None])[0]:
@@ -161,8 +162,8 @@ def uniform_connected(
     At most ``max_tries`` draws, fewer for large teams (about 2 million robot
     positions in all), so that an impossible request is refused in seconds.
     """
-    max_tries = int(min(max_tries, max(10, 2_000_000 // max(n, 1))))
-    center = _default_center(world) if center is None else np.asarray(center, dtype=float)
+    max_tries = uniform_tries(n, max_tries)
+    center = default_center(world) if center is None else np.asarray(center, dtype=float)
     extent = np.broadcast_to(np.asarray(extent_m, dtype=float), (world.dim,))
     _check_box_fits(n, extent, range_m, min_separation_m)
     for _ in range(max_tries):
@@ -177,6 +178,11 @@ def uniform_connected(
         f"no connected placement of {n} robots in a box of {extent.tolist()} m found in "
         f"{max_tries} draws; shrink extent_m or raise the sensing range"
     )
+
+
+def uniform_tries(n: int, max_tries: int) -> int:
+    """The draws :func:`uniform_connected` makes at most for ``n`` robots."""
+    return int(min(max_tries, max(10, 2_000_000 // max(n, 1))))
 
 
 MAX_EXPECTED_PAIRS = 50_000_000  # links of a uniform draw listed at once (~0.8 GB)
@@ -243,7 +249,7 @@ def initial_positions(
         return pos
     if cfg.kind == "grid":
         return grid_positions(
-            n, world.dim, cfg.spacing_m, _default_center(world) if center is None else center
+            n, world.dim, cfg.spacing_m, default_center(world) if center is None else center
         )
     if cfg.kind == "uniform":
         if cfg.extent_m is None or len(cfg.extent_m) not in (1, world.dim):

@@ -35,6 +35,7 @@ from tether.envs.observe import OBS_LIMIT
 from tether.envs.options import TERMS, env_options
 from tether.envs.setting import with_seed
 from tether.envs.tasks import Goals, LeaderPath, Targets
+from tether.envs.vector_start import place, start_plan
 from tether.paths.trajectory import Polyline
 from tether.runner import check_seed, place_team
 from tether.sim import TeamState
@@ -197,6 +198,7 @@ class TetherVectorEnv(VectorEnv):
         self._done = np.zeros(num_envs, np.int64)
         self._seeds = np.zeros(num_envs, np.int64)
         self._kernels = _kernels()
+        self._plan = start_plan(ep.built)
 
     # -- copies ------------------------------------------------------------------------
     def _initial(self, seed: int) -> np.ndarray:
@@ -213,27 +215,31 @@ class TetherVectorEnv(VectorEnv):
         return state.positions
 
     def _start(self, copies: np.ndarray) -> None:
-        """Place and reset the listed copies (positions, task state, first observation)."""
+        """Place and reset the listed copies (positions, task state, first observation).
+
+        The teams of all the copies are placed together (:mod:`.vector_start`); the task
+        state is set for all of them at once, with the arithmetic of one copy.
+        """
+        copies = np.asarray(copies, np.int64)
+        seeds = self._seeds[copies]
+        q, placed = place(self._plan, seeds, self.n, self.dim)
+        for k in np.flatnonzero(~placed):  # the strategy's own start, or no kernels
+            q[k] = self._initial(int(seeds[k]))
+        self.positions[copies], self.velocities[copies] = q, 0.0
+        self._steps[copies] = 0
         t = self._task
-        for e in copies:
-            q = self._initial(int(self._seeds[e]))
-            self.positions[e], self.velocities[e] = q, 0.0
-            self._steps[e] = 0
-            t[13][e] = q.mean(axis=0)
-            if t[0] == 1:  # the leader: the robot nearest the path's start (silent's rule)
-                strategy = self.template.built.strategy
-                lead = strategy.leader_arg
-                start = t[3][0]
-                t[1][e] = (
-                    np.argmin(np.linalg.norm(q - start, axis=1)) if lead is None else lead % self.n
-                )
-                t[2][e] = 0.0
-            elif t[0] == 2:
-                t[16][e] = np.linalg.norm(t[15] - q[t[14]], axis=1)
-            elif t[0] == 3:
-                t[21][e], t[22][e], t[23][e] = 0, 0.0, 0
+        t[13][copies] = q.mean(axis=1)
+        if t[0] == 1:  # the leader: the robot nearest the path's start (silent's rule)
+            lead = self.template.built.strategy.leader_arg
+            nearest = np.argmin(np.linalg.norm(q - t[3][0], axis=2), axis=1)
+            t[1][copies] = nearest if lead is None else lead % self.n
+            t[2][copies] = 0.0
+        elif t[0] == 2:
+            t[16][copies] = np.linalg.norm(t[15] - q[:, t[14]], axis=2)
+        elif t[0] == 3:
+            t[21][copies], t[22][copies], t[23][copies] = 0, 0.0, 0
         self._kernels.observe_some(
-            np.asarray(copies, np.int64),
+            copies,
             self.positions,
             self.velocities,
             self._steps,

@@ -5,7 +5,8 @@ for one (without sensing noise): the move of :mod:`tether.envs.plant`, the sense
 (range by :func:`~tether.graph.kernels.pairs_within_kernel`, line of sight on the grid by
 :func:`~tether.world.los_kernels.segment_free_kernel`, occlusion by robot bodies by
 :func:`~tether.sensing.robots_kernels.occluded_kernel`), components by union-find,
-lambda2 of the unweighted Laplacian (LAPACK ``dsyevd`` through ``eigvalsh``), the
+lambda2 of the unweighted Laplacian (LAPACK ``dsyevd`` through ``eigvalsh``; for two or
+three robots the exact value, the known spectrum of the path or the triangle), the
 bottleneck margin (Kruskal), close pairs, then the task (:mod:`.vector_tasks`), the
 observations and the rewards. Python is entered once per step for all copies, so small
 teams are not dominated by interpreter overhead.
@@ -20,7 +21,6 @@ from numba import njit
 
 from tether.envs.vector_tasks import observe_copy, task_copy
 from tether.envs.vector_world import point_free, segment_clear
-from tether.graph.kernels import pairs_within_kernel
 from tether.sensing.robots_kernels import occluded_kernel
 
 #: term indices (the order of tether.envs.options.TERMS)
@@ -30,14 +30,13 @@ N_TERMS = 10
 
 
 @njit(cache=True)
-def move_copy(q, v, a, step_m, dt, world):  # noqa: ANN001, ANN201
-    """Bound, move and stop one copy's robots (tether.envs.plant.move); returns blocked."""
+def move_copy(q, v, a, step_m, dt, world, start, disp, end):  # noqa: ANN001, ANN201, PLR0913
+    """Bound, move and stop one copy's robots (tether.envs.plant.move); returns blocked.
+
+    ``start``, ``disp`` and ``end`` are scratch arrays of ``dim`` values."""
     has_grid, free, shape, origin, to_cells, field, has_bounds, bounds, res = world
     n, dim = q.shape
     blocked = 0
-    start = np.empty(dim)
-    disp = np.empty(dim)
-    end = np.empty(dim)
     for i in range(n):
         s = 0.0
         for c in range(dim):
@@ -81,40 +80,99 @@ def _find(parent, x):  # noqa: ANN001, ANN201
     return x
 
 
+@njit(cache=True, inline="always")
+def _sq(q, i, j):  # noqa: ANN001, ANN202
+    """``sum_d (q_i - q_j)_d^2`` in coordinate order (``pairs_within_kernel``'s test)."""
+    s = 0.0
+    for c in range(q.shape[1]):
+        x = q[i, c] - q[j, c]
+        s += x * x
+    return s
+
+
 @njit(cache=True)
-def links_copy(q, range_m, body_m, world):  # noqa: ANN001, ANN201
-    """The sensed links of one copy, ``(m, 2)`` int64 (``tether.sensing.sensed_pairs``)."""
+def links_into(q, range_m, body_m, world, pairs, keep):  # noqa: ANN001, ANN201
+    """The sensed links of one copy (``tether.sensing.sensed_pairs``) into ``pairs[:m]``;
+    returns ``m``. ``pairs`` (``(n (n - 1) / 2, 2)`` int64) and ``keep`` (as many
+    booleans) are scratch. Occlusion is tested among all the pairs in range, before line
+    of sight removes any, as ``sensed_pairs`` does."""
     has_grid, free, shape, origin, to_cells, field = world[:6]
-    pairs = pairs_within_kernel(q, range_m)
-    keep = np.ones(len(pairs), np.bool_)
-    if has_grid:
-        for p in range(len(pairs)):
-            keep[p] = segment_clear(
-                q[pairs[p, 0]], q[pairs[p, 1]], has_grid, free, shape, origin, to_cells, field
-            )
-    if body_m > 0 and len(pairs):
-        hidden = occluded_kernel(q, pairs, body_m)
-        for p in range(len(pairs)):
+    n = q.shape[0]
+    r2 = range_m * range_m
+    m = 0
+    for i in range(n):  # pairs_within_kernel's pairs, in its order
+        for j in range(i + 1, n):
+            if _sq(q, i, j) <= r2:
+                pairs[m, 0], pairs[m, 1] = i, j
+                m += 1
+    for p in range(m):
+        keep[p] = not has_grid or segment_clear(
+            q[pairs[p, 0]], q[pairs[p, 1]], has_grid, free, shape, origin, to_cells, field
+        )
+    if body_m > 0 and m:
+        hidden = occluded_kernel(q, pairs[:m], body_m)
+        for p in range(m):
             keep[p] = keep[p] and not hidden[p]
-    return pairs[keep]
+    k = 0
+    for p in range(m):
+        if keep[p]:
+            pairs[k, 0], pairs[k, 1] = pairs[p, 0], pairs[p, 1]
+            k += 1
+    return k
 
 
 @njit(cache=True)
-def graph_terms(q, pairs, range_m, collision_m, terms):  # noqa: ANN001, ANN201
-    """Connected, lambda2, bottleneck margin and close pairs of one copy into ``terms``."""
+def work_arrays(n, dim, width):  # noqa: ANN001, ANN201
+    """Scratch of one copy's step, made once per call of :func:`step_all`: the move's
+    three points, the links and their flags, the graph's lengths, order and parents,
+    and the observation's task vectors, flags, row, neighbours, distances and point."""
+    most = max(n * (n - 1) // 2, 1)
+    return (
+        (np.empty(dim), np.empty(dim), np.empty(dim)),
+        (np.empty((most, 2), np.int64), np.empty(most, np.bool_)),
+        (np.empty(most), np.empty(most, np.int64), np.empty(n, np.int64)),
+        (np.empty((n, dim)), np.empty(n), np.empty(width), np.empty(n, np.int64), np.empty(n),
+         np.empty(dim)),
+    )  # fmt: skip
+
+
+#: pairs sorted by insertion up to this many (stable: np.argsort's mergesort order)
+INSERTION_MAX = 32
+
+
+@njit(cache=True)
+def _stable_order(length, m, order):  # noqa: ANN001, ANN202
+    """``np.argsort(length[:m], kind="mergesort")`` into ``order[:m]``."""
+    if m > INSERTION_MAX:
+        order[:m] = np.argsort(length[:m], kind="mergesort")
+        return
+    for p in range(m):
+        f = p
+        while f > 0 and length[order[f - 1]] > length[p]:
+            order[f] = order[f - 1]
+            f -= 1
+        order[f] = p
+
+
+@njit(cache=True)
+def graph_terms(q, pairs, range_m, collision_m, terms, length, order, parent):  # noqa: ANN001, ANN201, PLR0913
+    """Connected, lambda2, bottleneck margin and close pairs of one copy into ``terms``
+    (``length``, ``order`` and ``parent`` are scratch)."""
     n, dim = q.shape
     m = len(pairs)
-    length = np.empty(m)
     for p in range(m):
         s = 0.0
         for c in range(dim):
             d = q[pairs[p, 0], c] - q[pairs[p, 1], c]
             s += d * d
         length[p] = math.sqrt(s)
-    parent = np.arange(n)
+    for i in range(n):
+        parent[i] = i
     comps = n
     longest = 0.0
-    for p in np.argsort(length, kind="mergesort"):  # Kruskal: the bottleneck of a tree
+    _stable_order(length, m, order)
+    for k in range(m):  # Kruskal: the bottleneck of a spanning tree
+        p = order[k]
         a, b = _find(parent, pairs[p, 0]), _find(parent, pairs[p, 1])
         if a != b:
             parent[a] = b
@@ -122,7 +180,11 @@ def graph_terms(q, pairs, range_m, collision_m, terms):  # noqa: ANN001, ANN201
             longest = length[p]
     connected = comps <= 1
     lam = 0.0
-    if connected and n >= 2:
+    if connected and n == 2:  # one link: the spectrum of the path P2 is {0, 2}
+        lam = 2.0
+    elif connected and n == 3:  # the path P3 {0, 1, 3} (two links), the triangle {0, 3, 3}
+        lam = 1.0 if m == 2 else 3.0
+    elif connected and n >= 2:
         lap = np.zeros((n, n))
         for p in range(m):
             i, j = pairs[p, 0], pairs[p, 1]
@@ -139,8 +201,11 @@ def graph_terms(q, pairs, range_m, collision_m, terms):  # noqa: ANN001, ANN201
     else:
         terms[MARGIN] = max(1.0 - longest / range_m, 0.0) if connected else 0.0
     close = 0
-    if collision_m > 0:
-        close = len(pairs_within_kernel(q, collision_m))
+    if collision_m > 0:  # len(pairs_within_kernel(q, collision_m))
+        c2 = collision_m * collision_m
+        for i in range(n):
+            for j in range(i + 1, n):
+                close += _sq(q, i, j) <= c2
     terms[COLLISIONS] = close
 
 
@@ -154,20 +219,21 @@ def step_all(active, q, v, a, steps, obs, terms, rewards, done, sizes, world, ta
     """
     step_m, dt, vmax, range_m, body_m, collision_m = sizes[:6]
     max_steps = int(sizes[9])
-    n_copies = q.shape[0]
-    q_old = np.empty(q.shape[1:])
+    n_copies, n, dim = q.shape
+    q_old = np.empty((n, dim))
+    moving, linking, graph, seeing = work_arrays(n, dim, obs.shape[2])
     for e in range(n_copies):
         if not active[e]:
             continue
         q_old[:] = q[e]
-        blocked = move_copy(q[e], v[e], a[e], step_m, dt, world)
+        blocked = move_copy(q[e], v[e], a[e], step_m, dt, world, *moving)
         steps[e] += 1
-        pairs = links_copy(q[e], range_m, body_m, world)
+        pairs = linking[0][: links_into(q[e], range_m, body_m, world, *linking)]
         terms[e, :] = 0.0
         terms[e, BLOCKED] = blocked
-        graph_terms(q[e], pairs, range_m, collision_m, terms[e])
-        finished = task_copy(e, q_old, q[e], steps[e] * dt, task, terms[e])
-        observe_copy(e, q[e], v[e], pairs, steps[e] * dt, sizes, world, task, obs[e])
+        graph_terms(q[e], pairs, range_m, collision_m, terms[e], *graph)
+        finished = task_copy(e, q_old, q[e], steps[e] * dt, task, terms[e], seeing[5])
+        observe_copy(e, q[e], v[e], pairs, steps[e] * dt, sizes, world, task, obs[e], *seeing)
         r = 0.0
         for t in range(N_TERMS):
             r += weights[t] * terms[e, t]
@@ -178,6 +244,9 @@ def step_all(active, q, v, a, steps, obs, terms, rewards, done, sizes, world, ta
 @njit(cache=True)
 def observe_some(copies, q, v, steps, obs, sizes, world, task):  # noqa: ANN001, ANN201
     """The observations of the listed copies in their current state (after a reset)."""
+    _, n, dim = q.shape
+    _, linking, _, seeing = work_arrays(n, dim, obs.shape[2])
     for e in copies:
-        pairs = links_copy(q[e], sizes[3], sizes[4], world)
-        observe_copy(e, q[e], v[e], pairs, steps[e] * sizes[1], sizes, world, task, obs[e])
+        pairs = linking[0][: links_into(q[e], sizes[3], sizes[4], world, *linking)]
+        t_s = steps[e] * sizes[1]
+        observe_copy(e, q[e], v[e], pairs, t_s, sizes, world, task, obs[e], *seeing)

@@ -22,11 +22,13 @@ _PROGRESS, _TARGETS = 0, 1
 OBS_LIMIT = 1e5
 
 
-@njit(cache=True)
-def _norm(x):  # noqa: ANN001, ANN201
+@njit(cache=True, inline="always")
+def _dist(x, y):  # noqa: ANN001, ANN202
+    """``||x - y||``, summed in coordinate order (no array for the difference)."""
     s = 0.0
     for c in range(len(x)):
-        s += x[c] * x[c]
+        d = x[c] - y[c]
+        s += d * d
     return math.sqrt(s)
 
 
@@ -45,11 +47,11 @@ def path_at(s, wp, seg, cum, seg_len, length, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def path_project(point, s_min, window, wp, seg, denom, cum, seg_len, length):  # noqa: ANN001, ANN201
-    """``Polyline.project``: the closest path point's arc length in ``[s_min, s_min + window]``."""
+def path_project(point, s_min, window, wp, seg, denom, cum, seg_len, length, at):  # noqa: ANN001, ANN201, PLR0913
+    """``Polyline.project``: the closest path point's arc length in ``[s_min, s_min + window]``
+    (``at``: scratch of ``dim`` values)."""
     best_s, best_d = s_min, np.inf
     dim = wp.shape[1]
-    at = np.empty(dim)
     for k in range(len(denom)):
         s0, s1 = cum[k], cum[k + 1]
         if s1 < s_min or s0 > s_min + window:
@@ -62,30 +64,31 @@ def path_project(point, s_min, window, wp, seg, denom, cum, seg_len, length):  #
             t = min(max(acc / denom[k], 0.0), 1.0)
         s = min(max(s0 + t * (s1 - s0), s_min), s_min + window)
         path_at(s, wp, seg, cum, seg_len, length, at)
-        d = _norm(at - point)
+        d = _dist(at, point)
         if d < best_d:
             best_s, best_d = s, d
     return best_s
 
 
 @njit(cache=True)
-def task_copy(e, q_old, q, t_s, task, terms):  # noqa: ANN001, ANN201
-    """Progress of copy ``e``'s move ending at ``t_s`` into ``terms``; True when done."""
+def task_copy(e, q_old, q, t_s, task, terms, at):  # noqa: ANN001, ANN201, PLR0913
+    """Progress of copy ``e``'s move ending at ``t_s`` into ``terms``; True when done
+    (``at``: scratch of ``dim`` values)."""
     kind = task[0]
     if kind == 1:
         leader, progress = task[1][e], task[2]
         wp, seg, denom, cum, seg_len, length, end = task[3:10]
         window, tol = task[11], task[12]
         before = progress[e]
-        s = path_project(q[leader], before, window, wp, seg, denom, cum, seg_len, length)
+        s = path_project(q[leader], before, window, wp, seg, denom, cum, seg_len, length, at)
         progress[e] = max(before, s)
         terms[_PROGRESS] = progress[e] - before
-        return _norm(q[leader] - end) <= tol
+        return _dist(q[leader], end) <= tol
     if kind == 2:
         robots, goals, last = task[14], task[15], task[16]
         gain = 0.0
         for g in range(len(robots)):
-            now = _norm(goals[g] - q[robots[g]])
+            now = _dist(goals[g], q[robots[g]])
             gain += last[e, g] - now
             last[e, g] = now
         terms[_PROGRESS] = gain
@@ -98,8 +101,8 @@ def task_copy(e, q_old, q, t_s, task, terms):  # noqa: ANN001, ANN201
             k = nxt[e, r]
             if k >= count[r] or appear[r, k] > t_s - dt + 1e-12:
                 continue
-            near = _norm(tq[r, k] - q[r])
-            gain += _norm(tq[r, k] - q_old[r]) - near
+            near = _dist(tq[r, k], q[r])
+            gain += _dist(tq[r, k], q_old[r]) - near
             stayed[e, r] = stayed[e, r] + dt if near <= rz else 0.0
             if stayed[e, r] >= stay[r, k] - 1e-9:
                 nxt[e, r] += 1
@@ -124,33 +127,35 @@ def _task_vectors(e, q, t_s, task, vec, flag):  # noqa: ANN001, ANN201
     elif kind == 2:
         robots, goals = task[14], task[15]
         for g in range(len(robots)):
-            vec[robots[g]] = goals[g] - q[robots[g]]
+            for c in range(q.shape[1]):
+                vec[robots[g], c] = goals[g, c] - q[robots[g], c]
             flag[robots[g]] = 1.0
     elif kind == 3:
         tq, appear, count, nxt = task[17], task[19], task[20], task[21]
         for r in range(tq.shape[0]):
             k = nxt[e, r]
             if k < count[r] and appear[r, k] <= t_s + 1e-12:
-                vec[r] = tq[r, k] - q[r]
+                for c in range(q.shape[1]):
+                    vec[r, c] = tq[r, k, c] - q[r, c]
                 flag[r] = 1.0
 
 
 @njit(cache=True)
-def observe_copy(e, q, v, pairs, t_s, sizes, world, task, out):  # noqa: ANN001, ANN201, PLR0913
-    """Every robot's observation of copy ``e`` into ``out`` (``(n, size)`` float32)."""
+def observe_copy(e, q, v, pairs, t_s, sizes, world, task, out, vec, flag, row, nbr, dist, point):  # noqa: ANN001, ANN201, PLR0913
+    """Every robot's observation of copy ``e`` into ``out`` (``(n, size)`` float32).
+
+    ``vec`` (``(n, dim)``), ``flag``, ``nbr``, ``dist`` (``n``), ``row`` (``size``) and
+    ``point`` (``dim``) are scratch (:func:`tether.envs.vector_kernels.work_arrays`).
+    """
     has_grid, free, shape, origin, _, _, has_bounds, bounds, cell_m = world
     n, dim = q.shape
     vmax, range_m = sizes[2], sizes[3]
     k_slots, cells, res = int(sizes[6]), int(sizes[7]), sizes[8]
     centre = task[13][e]
-    vec = np.zeros((n, dim))
-    flag = np.zeros(n)
+    vec[:] = 0.0
+    flag[:] = 0.0
     _task_vectors(e, q, t_s, task, vec, flag)
     width = dim + 2
-    row = np.zeros(out.shape[1])
-    nbr = np.empty(n, np.int64)
-    dist = np.empty(n)
-    point = np.empty(dim)
     for i in range(n):
         row[:] = 0.0
         for c in range(dim):
@@ -163,7 +168,7 @@ def observe_copy(e, q, v, pairs, t_s, sizes, world, task, out):  # noqa: ANN001,
             j = pairs[p, 1] if pairs[p, 0] == i else (pairs[p, 0] if pairs[p, 1] == i else -1)
             if j < 0:
                 continue
-            d = _norm(q[j] - q[i])
+            d = _dist(q[j], q[i])
             f = m
             while f > 0 and (dist[f - 1] > d or (dist[f - 1] == d and nbr[f - 1] > j)):
                 nbr[f], dist[f] = nbr[f - 1], dist[f - 1]
