@@ -9,6 +9,7 @@ import pytest
 from _parameters import NO_EFFECT, effect
 from test_parameter_effects_exploration import explore
 from tether.continuous.params import TABLE2
+from tether.continuous.targets import TargetBook
 from tether.errors import ScenarioError
 
 NAME = "continuous_exploration"
@@ -64,9 +65,22 @@ def test_frontiers_are_picked_on_coarse_cells() -> None:
 
 
 @effect(f"{NAME}:stay_s")
-def test_a_long_stay_holds_robots_at_their_targets() -> None:
-    brief, long = run(60, stay_s=0.0), run(60, stay_s=1000.0)
-    assert brief.metrics["frontiers_given"] > long.metrics["frontiers_given"]
+def test_every_frontier_target_carries_the_stay(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Delta t of each target: how long its robot holds it before it may leave (the
+    # count of frontiers given in a short run is no stable oracle: it changes with the
+    # last bits of the floating point, so between processors)
+    stays: list[float] = []
+    add = TargetBook.add
+
+    def spy(self: TargetBook, robot: int, position_m: object, stay_s: float = 3.0, **kw: object):  # noqa: ANN202
+        stays.append(stay_s)
+        return add(self, robot, position_m, stay_s, **kw)
+
+    monkeypatch.setattr(TargetBook, "add", spy)
+    for stay in (0.0, 7.5):
+        stays.clear()
+        run(3, stay_s=stay)
+        assert stays and set(stays) == {stay}
 
 
 @effect(f"{NAME}:target_timeout_s")
