@@ -35,42 +35,15 @@ from tether.envs.observe import OBS_LIMIT
 from tether.envs.options import TERMS, env_options
 from tether.envs.setting import with_seed
 from tether.envs.tasks import Goals, LeaderPath, Targets
-from tether.envs.vector_start import place, start_plan
+from tether.envs.vector_start import place, start_plan, world_tuple
 from tether.paths.trajectory import Polyline
 from tether.runner import check_seed, place_team
 from tether.sim import TeamState
 
 
 def world_arrays(world: Any) -> tuple:
-    """The world tuple of :mod:`tether.envs.vector_world`."""
-    grid = world.grid
-    has_bounds = world.bounds_m is not None
-    bounds = world.bounds_m if has_bounds else np.zeros((2, world.dim))
-    if grid is None or not world.has_obstacles:
-        return (
-            False,
-            np.ones(1, np.bool_),
-            np.ones(world.dim, np.int64),
-            np.zeros(world.dim),
-            1.0,
-            np.zeros(0),
-            has_bounds,
-            bounds,
-            1.0,
-        )
-    field = grid.__dict__.get("distance_field_m")
-    field = np.zeros(0) if field is None or not field.flags.c_contiguous else field.ravel()
-    return (
-        True,
-        np.ascontiguousarray(grid.free_mask()).ravel(),
-        np.asarray(grid.shape, np.int64),
-        np.asarray(grid.origin_m, float),
-        1.0 / grid.resolution_m,
-        field,
-        has_bounds,
-        bounds,
-        float(grid.resolution_m),
-    )
+    """The world tuple of :mod:`tether.envs.vector_world` for the step kernels."""
+    return world_tuple(world, keep_grid=False)
 
 
 def task_arrays(task: Any, copies: int, n: int, dim: int, dt_s: float) -> tuple:

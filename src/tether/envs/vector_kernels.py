@@ -73,7 +73,8 @@ def move_copy(q, v, a, step_m, dt, world, start, disp, end):  # noqa: ANN001, AN
 
 
 @njit(cache=True)
-def _find(parent, x):  # noqa: ANN001, ANN201
+def find_root(parent, x):  # noqa: ANN001, ANN201
+    """The root of ``x`` in the union-find forest ``parent`` (path halving)."""
     while parent[x] != x:
         parent[x] = parent[parent[x]]
         x = parent[x]
@@ -173,7 +174,7 @@ def graph_terms(q, pairs, range_m, collision_m, terms, length, order, parent):  
     _stable_order(length, m, order)
     for k in range(m):  # Kruskal: the bottleneck of a spanning tree
         p = order[k]
-        a, b = _find(parent, pairs[p, 0]), _find(parent, pairs[p, 1])
+        a, b = find_root(parent, pairs[p, 0]), find_root(parent, pairs[p, 1])
         if a != b:
             parent[a] = b
             comps -= 1

@@ -19,7 +19,7 @@ The team must then be connected in the sensing graph without occlusion (range, a
 of sight when the world has obstacles), as :func:`tether.runner.place_team` checks.
 ``ok[k]`` is false where the placement or that check fails: the caller places those
 copies in Python, which raises the error ``tether run`` gives. The world tuple is that of
-:func:`tether.envs.vector.world_arrays` with the grid kept even without obstacles
+:func:`tether.envs.vector_start.world_tuple` with the grid kept even without obstacles
 (``World.points_free`` refuses points off the grid), plus whether links need a clear line
 of sight.
 """
@@ -31,6 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
+from tether.envs.vector_kernels import find_root
 from tether.envs.vector_random import (
     STATE_WORDS,
     bounded,
@@ -43,14 +44,6 @@ from tether.envs.vector_world import point_free, segment_clear
 RANDOM_CONNECTED, UNIFORM = 1, 2
 #: rounds of the first-come rule within a batch (tether.team._first_come's default)
 ROUNDS = 12
-
-
-@njit(cache=True)
-def _root(parent, x):  # noqa: ANN001, ANN202
-    while parent[x] != x:
-        parent[x] = parent[parent[x]]
-        x = parent[x]
-    return x
 
 
 @njit(cache=True)
@@ -78,7 +71,7 @@ def connected(q, range_m, los, world):  # noqa: ANN001, ANN201
                 q[i], q[j], has_grid, free, shape, origin, to_cells, field
             ):
                 continue
-            a, b = _root(parent, i), _root(parent, j)
+            a, b = find_root(parent, i), find_root(parent, j)
             if a != b:
                 parent[a] = b
                 comps -= 1

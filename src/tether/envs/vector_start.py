@@ -57,13 +57,17 @@ class StartPlan:
     args: tuple | None = None
 
 
-def placement_world(world: World) -> tuple:
-    """The world tuple of :mod:`tether.envs.vector_world` for ``World.points_free`` and
-    ``World.segments_clear`` exactly: the grid is kept even without obstacles."""
+def world_tuple(world: World, *, keep_grid: bool) -> tuple:
+    """The world tuple of :mod:`tether.envs.vector_world`.
+
+    ``keep_grid``: keep the grid even without obstacles, so that the placement kernels
+    answer ``World.points_free`` and ``World.segments_clear`` exactly; the step kernels
+    (``keep_grid=False``) skip an obstacle-free grid.
+    """
     grid = world.grid
     has_bounds = world.bounds_m is not None
     bounds = world.bounds_m if has_bounds else np.zeros((2, world.dim))
-    if grid is None:
+    if grid is None or not (keep_grid or world.has_obstacles):
         one = np.ones(world.dim, np.int64)
         return (False, np.ones(1, np.bool_), one, np.zeros(world.dim), 1.0, np.zeros(0),
                 has_bounds, bounds, 1.0)  # fmt: skip
@@ -107,7 +111,7 @@ def compiled_plan(init: InitConfig, n: int, world: World, range_m: float) -> Sta
         tries = int(_default(random_connected, "max_tries"))
         size = float(init.spacing_m)
     args = (COMPILED_KINDS[init.kind], center.astype(float), size, extent, float(range_m),
-            float(init.min_separation_m), int(tries), placement_world(world),
+            float(init.min_separation_m), int(tries), world_tuple(world, keep_grid=True),
             bool(world.has_obstacles))  # fmt: skip
     return StartPlan(args=args)
 
