@@ -141,7 +141,7 @@ def steiner_tree(
     red = reduce_instance(len(nodes), us, vs, w.tolist(), [index[t] for t in terms])
     cost, chosen = red.fixed_cost, list(red.fixed)
     if len(red.terminals) > 1:
-        solve = _solve_kernel if jit.enabled() else _solve_reference
+        solve = _solve_kernel if jit.enabled() else sparse_dreyfus_wagner
         rest, pairs = solve(red.size, red.us, red.vs, red.ws, red.terminals)
         edge_of = {}
         for i, (a, b) in enumerate(zip(red.us.tolist(), red.vs.tolist(), strict=True)):
@@ -153,18 +153,12 @@ def steiner_tree(
     return SteinerTree(float(cost), _as_tree(graph, edges, terms, weight))
 
 
-def _solve_reference(
-    n: int, us: np.ndarray, vs: np.ndarray, ws: np.ndarray, terminals: list[int]
-) -> tuple[float, list[tuple[int, int]]]:
-    """Optimal tree of the terminals of a reduced graph (positive weights) by
-    :func:`sparse_dreyfus_wagner` (numpy): its cost and edges as vertex pairs."""
-    return sparse_dreyfus_wagner(n, us, vs, ws, terminals)
-
-
 def _solve_kernel(
     n: int, us: np.ndarray, vs: np.ndarray, ws: np.ndarray, terminals: list[int]
 ) -> tuple[float, list[tuple[int, int]]]:
-    """:func:`_solve_reference` by the compiled kernels."""
+    """Optimal tree of the terminals of a reduced graph (positive weights) by the
+    compiled kernels, as :func:`sparse_dreyfus_wagner` finds it: its cost and edges as
+    vertex pairs."""
     from tether.recurrent.planning.steiner_kernels import steiner_kernel, tree_edges
 
     src = np.concatenate([us, vs])
