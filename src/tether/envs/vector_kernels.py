@@ -21,6 +21,7 @@ from numba import njit
 
 from tether.envs.vector_tasks import observe_copy, task_copy
 from tether.envs.vector_world import point_free, segment_clear
+from tether.graph.kernels import sq_dist
 from tether.sensing.robots_kernels import occluded_kernel
 
 #: term indices (the order of tether.envs.options.TERMS)
@@ -81,16 +82,6 @@ def find_root(parent, x):  # noqa: ANN001, ANN201
     return x
 
 
-@njit(cache=True, inline="always")
-def _sq(q, i, j):  # noqa: ANN001, ANN202
-    """``sum_d (q_i - q_j)_d^2`` in coordinate order (``pairs_within_kernel``'s test)."""
-    s = 0.0
-    for c in range(q.shape[1]):
-        x = q[i, c] - q[j, c]
-        s += x * x
-    return s
-
-
 @njit(cache=True)
 def links_into(q, range_m, body_m, world, pairs, keep):  # noqa: ANN001, ANN201
     """The sensed links of one copy (``tether.sensing.sensed_pairs``) into ``pairs[:m]``;
@@ -103,7 +94,7 @@ def links_into(q, range_m, body_m, world, pairs, keep):  # noqa: ANN001, ANN201
     m = 0
     for i in range(n):  # pairs_within_kernel's pairs, in its order
         for j in range(i + 1, n):
-            if _sq(q, i, j) <= r2:
+            if sq_dist(q, i, j) <= r2:
                 pairs[m, 0], pairs[m, 1] = i, j
                 m += 1
     for p in range(m):
@@ -206,7 +197,7 @@ def graph_terms(q, pairs, range_m, collision_m, terms, length, order, parent):  
         c2 = collision_m * collision_m
         for i in range(n):
             for j in range(i + 1, n):
-                close += _sq(q, i, j) <= c2
+                close += sq_dist(q, i, j) <= c2
     terms[COLLISIONS] = close
 
 

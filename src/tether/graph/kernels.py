@@ -80,19 +80,19 @@ def pairs_within_kernel(q, r):  # noqa: ANN001, ANN201
     m = 0
     for i in range(n):
         for j in range(i + 1, n):
-            m += _sq_dist(q, i, j) <= r2
+            m += sq_dist(q, i, j) <= r2
     out = np.empty((m, 2), np.int64)
     m = 0
     for i in range(n):
         for j in range(i + 1, n):
-            if _sq_dist(q, i, j) <= r2:
+            if sq_dist(q, i, j) <= r2:
                 out[m, 0], out[m, 1] = i, j
                 m += 1
     return out
 
 
 @njit(cache=True, inline="always")
-def _sq_dist(q, i, j):  # noqa: ANN001, ANN202
+def sq_dist(q, i, j):  # noqa: ANN001, ANN202
     """``sum_d (q_i - q_j)_d^2``, summed in coordinate order."""
     sq = 0.0
     for d in range(q.shape[1]):
