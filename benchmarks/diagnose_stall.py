@@ -28,9 +28,9 @@ import numpy as np
 import pyarrow.parquet as pq
 
 from tether.config import load_scenario
-from tether.continuous.gradient import exact_force
-from tether.continuous.motion import traveling_forces
-from tether.continuous.roles import PRIME, ROLE_NAMES
+from tether.continuous.connectivity.gradient import exact_force
+from tether.continuous.exploration.motion import traveling_forces
+from tether.continuous.exploration.roles import PRIME, ROLE_NAMES
 from tether.graph.fiedler import fiedler
 from tether.paths.astar import plan_path
 from tether.runner import build

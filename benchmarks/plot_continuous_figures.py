@@ -27,8 +27,8 @@ import numpy as np  # noqa: E402
 import pyarrow.parquet as pq  # noqa: E402
 
 from tether.config import load_scenario  # noqa: E402
-from tether.continuous.strategy import ConnectivityStrategyParams  # noqa: E402
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.strategy import ConnectivityStrategyParams  # noqa: E402
+from tether.continuous.connectivity.weights import compute_weights
 from tether.runner import build, run  # noqa: E402
 from tether.world.clearance import ObstacleIndex
 

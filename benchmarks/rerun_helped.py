@@ -1,9 +1,10 @@
 """Re-run the Fig. 9 trials in which a prime asked for help, with other settings.
 
-A setting of the helpers (``help_*`` of ``multi_target``, :mod:`tether.continuous.recruit`)
-changes only the trials in which a prime traveler asked for help: in every other trial
-nobody is recruited, so it is bit for bit the same (the request draws no random number).
-Its effect on a whole campaign is therefore measured by re-running those trials alone.
+A setting of the helpers (``help_*`` of ``multi_target``,
+:mod:`tether.continuous.exploration.recruit`) changes only the trials in which a prime
+traveler asked for help: in every other trial nobody is recruited, so it is bit for bit
+the same (the request draws no random number). Its effect on a whole campaign is
+therefore measured by re-running those trials alone.
 
 Reads ``RUNS/<scene>/sweep.parquet`` of a finished campaign (``benchmarks/fig9.py``),
 picks the trials with ``help_requests > 0`` (configuration seeds below ``--seeds``;

@@ -17,8 +17,8 @@ import pytest
 pytest.importorskip("numba")
 
 from tether import jit  # noqa: E402
-from tether.continuous.multi_target import _anchor_leaves  # noqa: E402
-from tether.continuous.pair_kernels import any_row_beyond  # noqa: E402
+from tether.continuous.connectivity.pair_kernels import any_row_beyond  # noqa: E402
+from tether.continuous.exploration.strategy import _anchor_leaves  # noqa: E402
 
 
 def numpy_test(q: np.ndarray, rows: np.ndarray, targets: np.ndarray, r: float) -> bool:

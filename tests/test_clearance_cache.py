@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from tether import jit
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.weights import compute_weights
 from tether.geometry import point_segment_distance
 from tether.world.clearance import ObstacleIndex
 from tether.world.grid import OccupancyGrid

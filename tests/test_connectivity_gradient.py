@@ -6,15 +6,15 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from tether.continuous.gradient import Messages, lambda2_gradient, messages
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.potential import (
+from tether.continuous.connectivity.gradient import Messages, lambda2_gradient, messages
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.potential import (
     potential,
     potential_slope,
     smooth_step,
     smooth_step_log_derivative,
 )
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.weights import compute_weights
 from tether.geometry import point_segment_distance
 from tether.world.clearance import ObstacleIndex
 from tether.world.grid import OccupancyGrid

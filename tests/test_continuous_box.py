@@ -6,7 +6,7 @@ import numpy as np
 import pyarrow.parquet as pq
 
 from tether.config import load_scenario, scenario_from_dict
-from tether.continuous.robot import stay_inside
+from tether.continuous.connectivity.robot import stay_inside
 from tether.runner import run
 
 BOX = np.array([[0.0, 0.0, 0.0], [10.0, 10.0, 3.0]])

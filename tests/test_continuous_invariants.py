@@ -29,11 +29,11 @@ import pytest
 from scipy.spatial import cKDTree
 
 from tether import jit
-from tether.continuous.dynamics import IntegratorParams, integrate
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.placement import safe_team
-from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.dynamics import IntegratorParams, integrate
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.placement import safe_team
+from tether.continuous.connectivity.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.continuous.connectivity.weights import compute_weights
 from tether.geometry import point_segment_distance
 from tether.sim import StepContext, TeamState
 from tether.world.clearance import ObstacleIndex

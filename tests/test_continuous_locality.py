@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from tether.comm import CommParams
-from tether.continuous.estimation import FiedlerEstimator
-from tether.continuous.gradient import connectivity_force, messages
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.estimation import FiedlerEstimator
+from tether.continuous.connectivity.gradient import connectivity_force, messages
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.weights import compute_weights
 from tether.world.clearance import ObstacleIndex
 from tether.world.grid import OccupancyGrid
 from tether.world.world import World

@@ -1,11 +1,14 @@
 """The integrator's compiled kernels give the numpy reference's bits.
 
-:mod:`tether.continuous.dynamics_kernels` runs one step of eq. (1) (the robot model of
-:mod:`tether.continuous.robot`, the world's box), the displacement rule and the sub-step's
-stiffness and energy terms; the references are :func:`~tether.continuous.robot.damped_step`,
-:func:`~tether.continuous.robot.dissipation`, :func:`~tether.continuous.robot.stay_inside`,
-:func:`~tether.continuous.dynamics.displacement_step` and
-:func:`~tether.continuous.dynamics.substep_terms`. Which path runs is pinned in every test.
+:mod:`tether.continuous.connectivity.dynamics_kernels` runs one step of eq. (1) (the robot
+model of :mod:`tether.continuous.connectivity.robot`, the world's box), the displacement
+rule and the sub-step's stiffness and energy terms; the references are
+:func:`~tether.continuous.connectivity.robot.damped_step`,
+:func:`~tether.continuous.connectivity.robot.dissipation`,
+:func:`~tether.continuous.connectivity.robot.stay_inside`,
+:func:`~tether.continuous.connectivity.dynamics.displacement_step` and
+:func:`~tether.continuous.connectivity.dynamics.substep_terms`. Which path runs is pinned
+in every test.
 """
 
 from __future__ import annotations
@@ -14,8 +17,8 @@ import numpy as np
 import pytest
 
 from tether import jit
-from tether.continuous.dynamics import displacement_step, robot_step, substep_terms
-from tether.continuous.robot import RobotModel, damped_step, stay_inside
+from tether.continuous.connectivity.dynamics import displacement_step, robot_step, substep_terms
+from tether.continuous.connectivity.robot import RobotModel, damped_step, stay_inside
 
 pytestmark = pytest.mark.skipif(not jit.available(), reason="needs numba")
 

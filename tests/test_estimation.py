@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.estimation import (
+from tether.continuous.connectivity.estimation import (
     EstimatorParams,
     FiedlerEstimator,
     estimate_errors,
 )
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.weights import compute_weights
 
 PARAMS = ConnectivityParams()
 ROUNDS = 6000

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tether.continuous.external import ExternalForce, external_force
+from tether.continuous.connectivity.external import ExternalForce, external_force
 
 
 @pytest.mark.parametrize(

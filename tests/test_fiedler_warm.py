@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.weights import compute_weights
 from tether.graph import SUBSET_MAX_N, warm_fiedler
 
 SPARSE_MIN_N = SUBSET_MAX_N + 1  # the first team size on the sparse / warm solvers

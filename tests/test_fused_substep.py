@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from tether import jit
-from tether.continuous.gradient import connectivity_force, exact_force, messages
-from tether.continuous.placement import safe_team
-from tether.continuous.strategy import ConnectivityStrategyParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.gradient import connectivity_force, exact_force, messages
+from tether.continuous.connectivity.placement import safe_team
+from tether.continuous.connectivity.strategy import ConnectivityStrategyParams
+from tether.continuous.connectivity.weights import compute_weights
 from tether.world.clearance import ObstacleIndex
 from tether.world.scenes import make_scene
 from tether.world.world import World

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from tether.config import load_scenario
-from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
-from tether.continuous.weights import WeightedGraph
+from tether.continuous.connectivity.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.continuous.connectivity.weights import WeightedGraph
 from tether.errors import ScenarioError
 from tether.record import TrajectoryRecorder
 from tether.runner import build

@@ -12,10 +12,15 @@ import pytest
 
 from _clearance_helpers import box_world, brute
 from tether import jit
-from tether.continuous.gradient import connectivity_force, edge_energy, lambda2_gradient, messages
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.tracking import PathSet, TrackedPath
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.gradient import (
+    connectivity_force,
+    edge_energy,
+    lambda2_gradient,
+    messages,
+)
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.weights import compute_weights
+from tether.continuous.exploration.tracking import PathSet, TrackedPath
 from tether.graph import fiedler, laplacian_dense, pairs_within
 from tether.paths.bspline import SplinePath
 from tether.world.clearance import ObstacleIndex
@@ -168,10 +173,10 @@ def test_subset_solver_is_scipys_eigh() -> None:
 def test_fused_substep_force_is_the_chain() -> None:
     """One compiled call per sub-step (force_kernels.total_force_kernel) = the reference chain."""
     from tether.config import load_scenario
-    from tether.continuous.dynamics import displacement_step
-    from tether.continuous.motion import travel_args, travel_gains, traveling_forces
-    from tether.continuous.roles import SECONDARY
-    from tether.continuous.substep import fused_total_force
+    from tether.continuous.connectivity.dynamics import displacement_step
+    from tether.continuous.exploration.motion import travel_args, travel_gains, traveling_forces
+    from tether.continuous.exploration.roles import SECONDARY
+    from tether.continuous.exploration.substep import fused_total_force
     from tether.runner import build
     from tether.sim import simulate
 

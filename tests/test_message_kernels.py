@@ -1,6 +1,6 @@
 """The compiled message rounds against their references: the same rounds, bit for bit.
 
-The election's merge and the consensus update (``continuous/round_kernels.py``), the
+The election's merge and the consensus update (``continuous/exploration/round_kernels.py``), the
 message layer's delivery and mailbox re-alignment (``comm_kernels.py``) run when
 ``tether.jit`` is on; with it off the numpy references run. Both must deliver the same
 messages (loss draws, delays, failures included) and reach the same states.
@@ -13,8 +13,8 @@ import pytest
 
 from tether import jit
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.consensus import EfficiencyConsensus
-from tether.continuous.election import Election
+from tether.continuous.exploration.consensus import EfficiencyConsensus
+from tether.continuous.exploration.election import Election
 
 pytest.importorskip("numba")
 

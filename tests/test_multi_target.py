@@ -11,10 +11,10 @@ import pyarrow.parquet as pq
 import pytest
 
 from tether.config import scenario_from_dict
-from tether.continuous.motion import traveling_forces
-from tether.continuous.multi_target import MultiTargetStrategy
-from tether.continuous.roles import PRIME, SECONDARY
-from tether.continuous.targets import TargetBook
+from tether.continuous.exploration.motion import traveling_forces
+from tether.continuous.exploration.roles import PRIME, SECONDARY
+from tether.continuous.exploration.strategy import MultiTargetStrategy
+from tether.continuous.exploration.targets import TargetBook
 from tether.record import TrajectoryRecorder
 from tether.runner import build, run
 from tether.sim import simulate
@@ -284,7 +284,7 @@ def test_lambda_p_is_defined_only_while_a_prime_travels(trials: list[Path]) -> N
 
 def test_the_experiment_preset_has_the_paper_s_consensus_gain() -> None:
     """Sec. 4.2: "We chose k_Lambda = 1"; the simulation presets keep the faster 5."""
-    from tether.continuous.multi_target_params import MultiTargetParams
+    from tether.continuous.exploration.params import MultiTargetParams
 
     assert MultiTargetParams(preset="experiment").k_lambda_per_s == 1.0
     assert MultiTargetParams(preset="outdoor").k_lambda_per_s == 5.0

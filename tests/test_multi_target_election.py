@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.election import ACTIVE, NO_TOKEN, TRANSIT, Election
+from tether.continuous.exploration.election import ACTIVE, NO_TOKEN, TRANSIT, Election
 
 
 def chain(n: int) -> np.ndarray:

@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from _cli import tether
-from tether.continuous.multi_target_checks import planning_bytes
-from tether.continuous.targets import MAX_TARGETS, PaperRandomParams
+from tether.continuous.exploration.checks import planning_bytes
+from tether.continuous.exploration.targets import MAX_TARGETS, PaperRandomParams
 from tether.paths.astar import planning_grid
 from tether.runner import build
 

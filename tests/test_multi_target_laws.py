@@ -9,10 +9,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.consensus import EfficiencyConsensus
-from tether.continuous.reference_filter import PAPER_GAINS, ReferenceFilter
-from tether.continuous.tracking import PathSet, TrackedPath
-from tether.continuous.travel import (
+from tether.continuous.exploration.consensus import EfficiencyConsensus
+from tether.continuous.exploration.reference_filter import PAPER_GAINS, ReferenceFilter
+from tether.continuous.exploration.tracking import PathSet, TrackedPath
+from tether.continuous.exploration.travel import (
     alignment,
     anchor_force,
     anchor_potential,

@@ -1,4 +1,4 @@
-"""Recruiting helpers for a stalled prime traveler (``tether.continuous.recruit``)."""
+"""Recruiting helpers for a stalled prime traveler (``tether.continuous.exploration.recruit``)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 from tether import jit
 from tether.comm import CommParams, MessageLayer
 from tether.config import load_scenario
-from tether.continuous.recruit import HelpFlood, RequestDepth, help_depth, help_force
+from tether.continuous.exploration.recruit import HelpFlood, RequestDepth, help_depth, help_force
 from tether.record import TrajectoryRecorder
 from tether.runner import build
 from tether.sim import simulate
@@ -212,7 +212,7 @@ def test_help_lambda_factor_scales_only_the_helpers_force_the_same_compiled_or_n
 def test_help_lambda_factor_defaults_per_preset_and_can_be_switched_off() -> None:
     """Outdoors a helper's connectivity force is scaled by 0.1 unless a scenario says
     otherwise; the office preset does not scale it (docs/explanation/multi_target.md, "Helpers")."""
-    from tether.continuous.multi_target_params import MultiTargetParams
+    from tether.continuous.exploration.params import MultiTargetParams
 
     assert MultiTargetParams().help_lambda_factor == 0.1
     assert MultiTargetParams(preset="outdoor").help_lambda_factor == 0.1

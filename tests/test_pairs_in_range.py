@@ -1,4 +1,5 @@
-"""The weights' pair search (:func:`tether.continuous.pair_kernels.pairs_in_range`), exactly.
+"""The weights' pair search, exactly
+(:func:`~tether.continuous.connectivity.pair_kernels.pairs_in_range`).
 
 Above ``BRUTE_MAX_N`` robots it has two cube searches: every cube in one array (compact
 teams) and sorted cube codes (spread-out teams). Both must give brute force's pairs,
@@ -14,7 +15,7 @@ import pytest
 
 pytest.importorskip("numba")
 
-from tether.continuous.pair_kernels import BRUTE_MAX_N, pairs_in_range  # noqa: E402
+from tether.continuous.connectivity.pair_kernels import BRUTE_MAX_N, pairs_in_range  # noqa: E402
 
 
 def brute(q: np.ndarray, r: float) -> np.ndarray:

@@ -10,8 +10,8 @@ import numpy as np
 from _parameter_runs import changed, ran
 from _parameters import effect
 from tether.config import load_scenario
-from tether.continuous.roles import PRIME, RolePlanner
-from tether.continuous.targets import TargetBook
+from tether.continuous.exploration.roles import PRIME, RolePlanner
+from tether.continuous.exploration.targets import TargetBook
 from tether.world.world import World
 
 

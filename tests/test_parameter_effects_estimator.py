@@ -1,6 +1,6 @@
 """The eigensolver and the decentralized estimator of Yang et al. (2010) in ``connectivity``
 and ``multi_target`` (``docs/continuous.md``, "Decentralized estimation"; the gains in
-:mod:`tether.continuous.estimation`), each set from a scenario: the strategy ``build``
+:mod:`tether.continuous.connectivity.estimation`), each set from a scenario: the strategy ``build``
 made is reset (its estimator warms up on the initial team) or run for a few periods."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The external force ``f_i`` of eq. (1) in ``connectivity`` (``strategy.params.external``;
-:mod:`tether.continuous.external`), set from a scenario.
+:mod:`tether.continuous.connectivity.external`), set from a scenario.
 
 Most runs set ``lambda2_null`` below the row's lambda2 (about 0.58), so the connectivity
 force is zero while the row keeps its shape and each robot moves by ``f_i`` alone.

@@ -8,8 +8,8 @@ import pytest
 
 from _parameters import NO_EFFECT, effect
 from test_parameter_effects_exploration import explore
-from tether.continuous.params import TABLE2
-from tether.continuous.targets import TargetBook
+from tether.continuous.connectivity.params import TABLE2
+from tether.continuous.exploration.targets import TargetBook
 from tether.errors import ScenarioError
 
 NAME = "continuous_exploration"

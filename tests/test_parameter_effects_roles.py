@@ -13,7 +13,7 @@ import pytest
 
 from _continuous_runs import columns, run, scenario, started
 from _parameters import effect
-from tether.continuous.roles import PRIME, SECONDARY
+from tether.continuous.exploration.roles import PRIME, SECONDARY
 
 
 def door_world(tmp_path: Path) -> dict[str, Any]:

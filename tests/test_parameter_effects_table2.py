@@ -13,8 +13,8 @@ import pytest
 
 from _continuous_runs import STRATEGIES, both, moved_m, pulled, reset, run, scenario
 from _parameters import effect
-from tether.continuous.multi_target_params import PRESET_DEFAULTS
-from tether.continuous.params import TABLE2, TRAVEL_TABLE2
+from tether.continuous.connectivity.params import TABLE2, TRAVEL_TABLE2
+from tether.continuous.exploration.params import PRESET_DEFAULTS
 
 BOTH = pytest.mark.parametrize("strategy", STRATEGIES)
 RADII = ("rs_inner_m", "rs_m", "ro_m", "ro_outer_m", "rc_m", "rc_outer_m")

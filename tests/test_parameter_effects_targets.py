@@ -1,5 +1,5 @@
 """``multi_target``'s target generators (``strategy.params.targets``: ``kind`` and its
-``params``; :mod:`tether.continuous.targets`), set from a scenario: the queues the
+``params``; :mod:`tether.continuous.exploration.targets`), set from a scenario: the queues the
 strategy ``build`` made, and short runs for stay and expiry times."""
 
 from __future__ import annotations

@@ -18,8 +18,8 @@ import pytest
 
 from _continuous_runs import FAR_TARGET, columns, moved_m, pulled, run, scenario, started
 from _parameters import effect
-from tether.continuous.motion import traveling_forces
-from tether.continuous.roles import PRIME
+from tether.continuous.exploration.motion import traveling_forces
+from tether.continuous.exploration.roles import PRIME
 
 
 def two_travelers(**params: Any) -> dict[str, Any]:

@@ -4,8 +4,9 @@
 The teams start near the barrier (a chain stretched towards ``Rs``, lambda2 about 1e-4,
 so ``V`` is thousands of joules and the connectivity force is stiff) with small random
 velocities. ``E`` is computed independently of the integrator's bookkeeping: the exact
-lambda2 of the configuration (:func:`tether.continuous.weights.compute_weights`) through
-the potential of App. A, checked after every control period and at every sub-step.
+lambda2 of the configuration
+(:func:`tether.continuous.connectivity.weights.compute_weights`) through the potential of
+App. A, checked after every control period and at every sub-step.
 A step rule that ignores the force's stiffness injects energy here (the chain is thrown
 apart and back); the tolerance is 1e-9 of the start energy.
 """
@@ -15,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tether.continuous.potential import potential
-from tether.continuous.strategy import ConnectivityStrategy, ConnectivityStrategyParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.potential import potential
+from tether.continuous.connectivity.strategy import ConnectivityStrategy, ConnectivityStrategyParams
+from tether.continuous.connectivity.weights import compute_weights
 from tether.sim import StepContext, TeamState
 from tether.world.clearance import ObstacleIndex
 from tether.world.scenes import make_scene

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tether.continuous.robot import RobotModel, damped_step, dissipation
+from tether.continuous.connectivity.robot import RobotModel, damped_step, dissipation
 
 finite = st.floats(-1e6, 1e6, allow_nan=False)
 

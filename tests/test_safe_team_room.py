@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.placement import safe_team
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.placement import safe_team
 from tether.world.world import World
 
 
@@ -33,7 +33,7 @@ def test_a_team_that_cannot_fit_packed_densest_is_refused_before_any_draw():
 
 def test_a_full_world_stops_at_the_work_bound(monkeypatch):
     """A team that fits packed densest but not by random growth is refused, naming the fill."""
-    monkeypatch.setattr("tether.continuous.placement.MAX_PAIR_CHECKS", 5_000_000)
+    monkeypatch.setattr("tether.continuous.connectivity.placement.MAX_PAIR_CHECKS", 5_000_000)
     with pytest.raises(ValueError, match="filled up after"):
         safe_team(box(10.0), 150, PARAMS, np.random.default_rng(0), center_m=[5.0, 5.0, 5.0])
 

@@ -203,8 +203,8 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
     ``auto`` runs it, in the fused kernel or in ``fiedler``."""
     import importlib
 
-    import tether.continuous.kernels as kernels
-    import tether.continuous.weights as weights
+    import tether.continuous.connectivity.kernels as kernels
+    import tether.continuous.connectivity.weights as weights
     from tether.config import load_scenario
     from tether.runner import build
     from tether.sim import simulate
@@ -241,8 +241,8 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
 def test_multi_target_defaults_to_the_small_solver_as_connectivity_does() -> None:
     """The Fig. 9 campaign in the docs (seventh session) ran with the certified small
     solver; ``fiedler_method: lapack`` stays available (the earlier campaigns)."""
-    from tether.continuous.multi_target_params import MultiTargetParams
-    from tether.continuous.strategy import ConnectivityStrategyParams
+    from tether.continuous.connectivity.strategy import ConnectivityStrategyParams
+    from tether.continuous.exploration.params import MultiTargetParams
 
     assert MultiTargetParams().fiedler_method == "auto"
     assert MultiTargetParams(fiedler_method="lapack").fiedler_method == "lapack"

@@ -1,4 +1,4 @@
-"""The compiled eigenpair of one sub-step (``tether.continuous.kernels``) and the
+"""The compiled eigenpair of one sub-step (``tether.continuous.connectivity.kernels``) and the
 compiled ``dsyevr`` call (``tether.graph.lapack_kernels``) give the reference's bits.
 
 Oracles: scipy's f2py ``dsyevr`` wrapper (the reference's call), the numpy path of
@@ -56,7 +56,7 @@ def test_compiled_dsyevr_is_the_f2py_call(seed: int) -> None:
 def test_fiedler_kernel_is_fiedler(method: str, seed: int) -> None:
     """Decided pairs equal ``fiedler``'s numpy path bit for bit, the sign follows the
     guess, and a connected graph is always decided (the kernel does not just punt)."""
-    from tether.continuous.kernels import fiedler_kernel
+    from tether.continuous.connectivity.kernels import fiedler_kernel
 
     rng = np.random.default_rng(seed)
     for n in (17, 35, 80):
@@ -78,7 +78,7 @@ def test_fiedler_kernel_is_fiedler(method: str, seed: int) -> None:
 def test_small_solver_failure_falls_back_to_dsyevr_in_the_kernel() -> None:
     """A cycle has lambda2 = lambda3: the small solver cannot certify, the kernel's
     dsyevr answer is the reference's (which also falls back)."""
-    from tether.continuous.kernels import fiedler_kernel
+    from tether.continuous.connectivity.kernels import fiedler_kernel
 
     n = 36
     pairs = np.array([(i, (i + 1) % n) for i in range(n)], dtype=np.int64)
@@ -99,7 +99,7 @@ def test_small_solver_failure_falls_back_to_dsyevr_in_the_kernel() -> None:
 def test_disconnected_graph_is_left_to_fiedler(method: str) -> None:
     """lambda2 at rounding level: the kernel does not decide; ``fiedler`` gives exactly 0
     and a component vector (what a kernel returning dsyevr's tiny value would miss)."""
-    from tether.continuous.kernels import fiedler_kernel
+    from tether.continuous.connectivity.kernels import fiedler_kernel
 
     rng = np.random.default_rng(5)
     n = 30

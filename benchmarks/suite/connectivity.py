@@ -45,7 +45,7 @@ def world(name: str):  # noqa: ANN201
 
 
 def team(w, n: int, params) -> np.ndarray:  # noqa: ANN001
-    from tether.continuous.placement import safe_team
+    from tether.continuous.connectivity.placement import safe_team
 
     rng = np.random.default_rng(n)
     if n >= 10_000:  # 66 x 51 x 3 lattice, 3 m apart (inside R's, outside R'c), jittered
@@ -56,10 +56,10 @@ def team(w, n: int, params) -> np.ndarray:  # noqa: ANN001
 
 def substep(w, n: int, solver: str, calls: int) -> dict:  # noqa: ANN001
     """Seconds per call of each part and of the whole sub-step; the first call apart."""
-    from tether.continuous.estimation import FiedlerEstimator
-    from tether.continuous.gradient import connectivity_force, exact_force, messages
-    from tether.continuous.strategy import ConnectivityStrategyParams
-    from tether.continuous.weights import compute_weights
+    from tether.continuous.connectivity.estimation import FiedlerEstimator
+    from tether.continuous.connectivity.gradient import connectivity_force, exact_force, messages
+    from tether.continuous.connectivity.strategy import ConnectivityStrategyParams
+    from tether.continuous.connectivity.weights import compute_weights
     from tether.graph import WarmState
     from tether.world.clearance import ObstacleIndex
 

@@ -25,9 +25,9 @@ SIZES = (35, 100, 400)
 
 def _problem(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(laplacian, pairs, guess)`` of a free-space team of ``n`` robots."""
-    from tether.continuous.placement import safe_team
-    from tether.continuous.strategy import ConnectivityStrategyParams
-    from tether.continuous.weights import compute_weights
+    from tether.continuous.connectivity.placement import safe_team
+    from tether.continuous.connectivity.strategy import ConnectivityStrategyParams
+    from tether.continuous.connectivity.weights import compute_weights
     from tether.graph.structure import laplacian_dense
     from tether.world.clearance import ObstacleIndex
     from tether.world.world import World

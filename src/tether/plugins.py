@@ -40,8 +40,8 @@ from tether.registry import LINK_MODELS, SCENES, STRATEGIES, TARGET_GENERATORS, 
 BUILTINS: dict[Registry, dict[str, str]] = {
     STRATEGIES: {
         "silent": "tether.silent.strategy",
-        "connectivity": "tether.continuous.strategy",
-        "multi_target": "tether.continuous.multi_target",
+        "connectivity": "tether.continuous.connectivity.strategy",
+        "multi_target": "tether.continuous.exploration.strategy",
         "recurrent": "tether.recurrent.strategy",
         "utility": "tether.recurrent.strategy",
         "unconstrained": "tether.mission.unconstrained",
@@ -62,9 +62,9 @@ BUILTINS: dict[Registry, dict[str, str]] = {
         "signal": "tether.sensing.links",
     },
     TARGET_GENERATORS: {
-        "fixed": "tether.continuous.targets",
-        "schedule": "tether.continuous.targets",
-        "paper_random": "tether.continuous.targets",
+        "fixed": "tether.continuous.exploration.targets",
+        "schedule": "tether.continuous.exploration.targets",
+        "paper_random": "tether.continuous.exploration.targets",
     },
 }
 

@@ -12,7 +12,7 @@ The team starts around the base station in the controller's safe set: the base
 station is drawn as for every paradigm (or given by ``base_m``); if it is within
 ``R'o`` of an obstacle it moves to the nearest point of the same free region that is
 not (the controller's start needs it); the robots are then placed around it, each
-within ``R's`` of another node (:func:`tether.continuous.placement.safe_team`).
+within ``R's`` of another node (:func:`tether.continuous.connectivity.placement.safe_team`).
 
 The mission's data layer, sensor and links are the ones of every paradigm
 (:mod:`tether.mission.continuous_policy`). ``speed_m_s`` is the robots' top speed.
@@ -28,8 +28,8 @@ from pydantic import Field, ValidationError
 from scipy import ndimage
 
 from tether.config import format_validation_error
-from tether.continuous.multi_target_params import MultiTargetParams
-from tether.continuous.placement import safe_team
+from tether.continuous.connectivity.placement import safe_team
+from tether.continuous.exploration.params import MultiTargetParams
 from tether.errors import ScenarioError
 from tether.mission.continuous_policy import ContinuousPolicy
 from tether.recurrent.strategy import ExplorationParams, ExplorationPlugin

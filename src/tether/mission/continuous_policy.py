@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from tether.continuous.multi_target_params import MultiTargetParams
-from tether.continuous.roles import ANCHOR
+from tether.continuous.exploration.params import MultiTargetParams
+from tether.continuous.exploration.roles import ANCHOR
 from tether.mission.fixed_base import FixedBaseMultiTarget
 from tether.mission.frontier_targets import FrontierPicker
 from tether.paths.astar import planning_grid

@@ -1,6 +1,6 @@
 """``multi_target`` with a base station as a fixed node of the weighted graph.
 
-The continuous-connectivity controller (:class:`~tether.continuous.multi_target.
+The continuous-connectivity controller (:class:`~tether.continuous.exploration.strategy.
 MultiTargetStrategy`: roles, the prime-traveler election, the consensus, Algorithm 2's
 traveling force and the connectivity force of App. A) on a team whose last node is the
 base station. The base station is a node of the weighted graph like any robot: its
@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from tether.continuous.dynamics import displacement_step
-from tether.continuous.multi_target import MultiTargetStrategy
-from tether.continuous.multi_target_params import MultiTargetParams
-from tether.continuous.targets import TargetBook
+from tether.continuous.connectivity.dynamics import displacement_step
+from tether.continuous.exploration.params import MultiTargetParams
+from tether.continuous.exploration.strategy import MultiTargetStrategy
+from tether.continuous.exploration.targets import TargetBook
 
 __all__ = ["FixedBaseMultiTarget"]
 

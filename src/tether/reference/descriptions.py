@@ -8,17 +8,17 @@ already describes.
 
 from __future__ import annotations
 
-_CONNECTIVITY = "tether.continuous.strategy_params.ConnectivityStrategyParams"
+_CONNECTIVITY = "tether.continuous.connectivity.strategy_params.ConnectivityStrategyParams"
 #: the parameters connectivity and multi_target share
-_CONTINUOUS = "tether.continuous.strategy_params.ContinuousParams"
-_ESTIMATOR = "tether.continuous.estimation.EstimatorParams"
-_ESTIMATOR_CONFIG = "tether.continuous.strategy_params.EstimatorConfig"
-_EXTERNAL = "tether.continuous.external.ExternalForce"
-_MULTI = "tether.continuous.multi_target_params.MultiTargetParams"
-_TARGETS = "tether.continuous.multi_target_params.TargetsConfig"
-_MESSAGES = "tether.continuous.multi_target_params.MessagesConfig"
-_START = "tether.continuous.multi_target_params.StartConfig"
-_GEN = "tether.continuous.targets"
+_CONTINUOUS = "tether.continuous.connectivity.strategy_params.ContinuousParams"
+_ESTIMATOR = "tether.continuous.connectivity.estimation.EstimatorParams"
+_ESTIMATOR_CONFIG = "tether.continuous.connectivity.strategy_params.EstimatorConfig"
+_EXTERNAL = "tether.continuous.connectivity.external.ExternalForce"
+_MULTI = "tether.continuous.exploration.params.MultiTargetParams"
+_TARGETS = "tether.continuous.exploration.params.TargetsConfig"
+_MESSAGES = "tether.continuous.exploration.params.MessagesConfig"
+_START = "tether.continuous.exploration.params.StartConfig"
+_GEN = "tether.continuous.exploration.targets"
 
 KEY_DESCRIPTIONS: dict[str, str] = {
     # the connectivity force (Table 2) and the robot model

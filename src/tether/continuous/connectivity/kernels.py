@@ -1,8 +1,8 @@
 """Compiled kernels of App. A: pairs, clearance, weights, Laplacian (numba, lazy).
 
-(Closest points on paths: :mod:`tether.continuous.tracking_kernels`; forces and motion of
-a sub-step: :mod:`tether.continuous.force_kernels`; the pair search:
-:mod:`tether.continuous.pair_kernels`.)
+(Closest points on paths: :mod:`tether.continuous.exploration.tracking_kernels`; forces
+and motion of a sub-step: :mod:`tether.continuous.connectivity.force_kernels`; the pair
+search: :mod:`tether.continuous.connectivity.pair_kernels`.)
 
 :func:`evaluate_fiedler_kernel` is one sub-step's evaluation in one call: the weights,
 the eigenpair as :func:`tether.graph.fiedler.fiedler` finds it for ``17 <= n <= 400``
@@ -15,7 +15,7 @@ same bits (``tests/test_step_kernels.py``, ``tests/test_fused_substep.py``). A l
 at rounding level (``fiedler``'s component check) or a failed ``dsyevr`` is left to
 Python (``decided = False``).
 
-The fast paths of :func:`tether.continuous.weights.compute_weights`, used when
+The fast paths of :func:`tether.continuous.connectivity.weights.compute_weights`, used when
 :func:`tether.jit.enabled`. Each loop does the arithmetic of its numpy reference in the
 same order (``np.add.at`` and ``np.bincount`` accumulate in index order; the norm of a
 row is ``sqrt((x0^2 + x1^2) + x2^2)``; ``scipy.special.expit(x)`` is
@@ -33,9 +33,14 @@ import numpy as np
 from numba import njit
 
 from tether import jit
-from tether.continuous.force_kernels import exact_force_kernel
-from tether.continuous.pair_kernels import any_row_beyond, pairs_below, pairs_in_range, row_norm
-from tether.continuous.potential_kernels import log_derivative1, smooth_step1
+from tether.continuous.connectivity.force_kernels import exact_force_kernel
+from tether.continuous.connectivity.pair_kernels import (
+    any_row_beyond,
+    pairs_below,
+    pairs_in_range,
+    row_norm,
+)
+from tether.continuous.connectivity.potential_kernels import log_derivative1, smooth_step1
 from tether.graph import small
 from tether.graph.fiedler import _TINY_REL
 from tether.graph.kernels import laplacian_dense_kernel
@@ -49,12 +54,12 @@ from tether.world.clearance_cache_kernels import segments_nearest_cached
 def weights_kernel(  # noqa: ANN201, PLR0913
     q, pairs, has_obstacles, clearance, s_star, o_star, rs_inner, rs, ro, ro_outer, rc, rc_outer
 ):  # noqa: ANN001
-    """Every array of :class:`tether.continuous.weights.WeightedGraph` for ``pairs``.
+    """Every array of :class:`tether.continuous.connectivity.weights.WeightedGraph` for ``pairs``.
 
     ``pairs`` are within ``Rs``; ``clearance``, ``s_star``, ``o_star`` are the
     obstacle search's results for them (ignored unless ``has_obstacles``). Returns
     ``pair_factor, dP_di, dP_dj, clearance, collision, coll_pairs, coll_unit,
-    coll_logd``, each computed as :func:`~tether.continuous.weights.compute_weights`
+    coll_logd``, each computed as :func:`~tether.continuous.connectivity.weights.compute_weights`
     does.
     """
     n, dim = q.shape
@@ -157,7 +162,8 @@ def evaluate_kernel(  # noqa: ANN201, PLR0913
     q, rs_inner, rs, ro, ro_outer, rc, rc_outer, want_laplacian, obstacles, points, tree,
     table, used, slack, field, order,
 ):  # noqa: ANN001  # fmt: skip
-    """:func:`~tether.continuous.weights.compute_weights` in one call, plus ``W`` and ``L``.
+    """:func:`~tether.continuous.connectivity.weights.compute_weights` in one call, plus
+    ``W`` and ``L``.
 
     Pairs (:func:`pairs_in_range`), their clearance (``obstacles``: the cached search
     :func:`~tether.world.clearance_cache_kernels.segments_nearest_cached` on ``points``,
@@ -282,7 +288,7 @@ def evaluate_fiedler_kernel(  # noqa: ANN201, PLR0913
     q, rs_inner, rs, ro, ro_outer, rc, rc_outer, obstacles, points, tree, table, used, slack,
     field, order, guess, lapack, small, lwork, liwork, potential, with_force,
 ):  # noqa: ANN001  # fmt: skip
-    """:func:`~tether.continuous.kernels.evaluate_kernel` (with the Laplacian), then
+    """:func:`~tether.continuous.connectivity.kernels.evaluate_kernel` (with the Laplacian), then
     :func:`fiedler_kernel` on it from ``guess``, then with ``with_force`` the force of
     the eigenpair (``potential = (lambda2_min, lambda2_null, gain)``).
 
@@ -354,7 +360,7 @@ def warm_up() -> float:
     out = weights_kernel(q, pairs, True, clear, s, o, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
     pf, dP_di, dP_dj, _, coll, cp, cu, cl = out
     nu = np.array([-0.5, 0.0, 0.5])
-    from tether.continuous.force_kernels import warm_up as force_warm_up
+    from tether.continuous.connectivity.force_kernels import warm_up as force_warm_up
 
     force_warm_up(q, pairs, out, nu)
     laplacian_dense_kernel(3, pairs, pf)
@@ -363,7 +369,7 @@ def warm_up() -> float:
     first = np.array([0, 1], dtype=np.int64)
     seg = np.ones((1, 3))
     one = np.ones(1)
-    from tether.continuous.tracking_kernels import path_states_kernel
+    from tether.continuous.exploration.tracking_kernels import path_states_kernel
 
     path_states_kernel(q[:1].copy(), first, seg, seg, one, one, one, seg, seg, seg, seg, one,
                        one, 1e-6, 1, one.copy(), one.copy() + 1, np.full(1, -1))  # fmt: skip
@@ -393,8 +399,8 @@ def warm_up() -> float:
                                              (0.0, 0.5, 1.0), True)  # fmt: skip
     # every other kernel module's warm-up (imports here: numba only once asked for)
     from tether.comm_kernels import warm_up as comm
-    from tether.continuous.dynamics_kernels import warm_up as dynamics
-    from tether.continuous.round_kernels import warm_up as rounds
+    from tether.continuous.connectivity.dynamics_kernels import warm_up as dynamics
+    from tether.continuous.exploration.round_kernels import warm_up as rounds
     from tether.graph.grid_kernels import warm_up as grid
     from tether.graph.link_kernels import warm_up as links
     from tether.graph.metrics_kernels import warm_up as metrics

@@ -1,10 +1,10 @@
 """Compiled search of the robot pairs within a range (numba, lazy).
 
 :func:`pairs_in_range` finds the pairs of App. A's weighted graph (the robots within
-``Rs``) for :mod:`tether.continuous.kernels`; :func:`pairs_below` filters given pairs.
+``Rs``) for :mod:`tether.continuous.connectivity.kernels`; :func:`pairs_below` filters given pairs.
 The same pairs, in lexicographic order, as the numpy reference
 (:func:`tether.graph.structure.pairs_within` followed by the distance test of
-:func:`tether.continuous.weights.compute_weights`): ``tests/test_pairs_in_range.py``.
+:func:`tether.continuous.connectivity.weights.compute_weights`): ``tests/test_pairs_in_range.py``.
 :func:`any_row_beyond` is the anchors' distance test of the ``multi_target`` strategy.
 """
 
@@ -206,7 +206,7 @@ def any_row_beyond(q, rows, targets, r):  # noqa: ANN001, ANN201
     """``numpy.any(numpy.linalg.norm(q[rows] - targets, axis=1) >= r)``, the same
     distances (:func:`row_norm`) without numpy's per-call overhead.
 
-    The anchor test of :meth:`tether.continuous.multi_target.MultiTargetStrategy.evaluate`
+    The anchor test of :meth:`tether.continuous.exploration.strategy.MultiTargetStrategy.evaluate`
     (an anchor must stay within ``Rz`` of its target, Nestmeyer et al. 2017, Sec. 4).
     """
     dim = q.shape[1]

@@ -5,7 +5,7 @@ Connectors 0; the prime traveler ``f_travel`` (eq. (3)); secondary travelers
 (15)); anchors ``f_anchor`` (eq. (7)). Robot ``i``'s force uses only its own state, path
 and target, its ``f_lambda_i`` and ``Lambda_hat_i`` (decentralized). The numpy reference
 is :func:`traveling_forces`; with the kernels on, one call of
-:func:`tether.continuous.tracking_kernels.traveling_kernel` (the same bits).
+:func:`tether.continuous.exploration.tracking_kernels.traveling_kernel` (the same bits).
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from tether import jit
-from tether.continuous.multi_target_params import MultiTargetParams
-from tether.continuous.roles import SECONDARY, RolePlanner
-from tether.continuous.travel import alignment, anchor_force, rho, travel_force
+from tether.continuous.exploration.params import MultiTargetParams
+from tether.continuous.exploration.roles import SECONDARY, RolePlanner
+from tether.continuous.exploration.travel import alignment, anchor_force, rho, travel_force
 
 
 def traveling_forces(
@@ -72,7 +72,7 @@ def _traveling_forces_kernel(
     anchors: tuple[np.ndarray, np.ndarray],
 ) -> np.ndarray:
     """:func:`traveling_forces` in one call of the compiled kernel (same bits)."""
-    from tether.continuous.tracking_kernels import traveling_kernel
+    from tether.continuous.exploration.tracking_kernels import traveling_kernel
 
     return traveling_kernel(np.ascontiguousarray(q), np.ascontiguousarray(v),
                             np.ascontiguousarray(f_lambda),
@@ -92,7 +92,7 @@ def travel_args(
     and their targets, the paths' kernel arrays, ``v_cruise``, the tie width and
     :func:`~tether.world.clearance.einsum_order`.
     """
-    from tether.continuous.tracking import TIE_M
+    from tether.continuous.exploration.tracking import TIE_M
     from tether.world.clearance import einsum_order
 
     trav, paths = planner.path_set()

@@ -20,7 +20,7 @@ sight comes within ``Ro`` of an obstacle point, or (c) some robot ``k`` is
 within ``Rc`` of ``i`` or of ``j``. ``P_ij = A B`` is the *pair factor*.
 
 The smooth step ``S`` and its log-derivative are in
-:mod:`tether.continuous.potential`; line-of-sight clearance ``d_ijo`` comes
+:mod:`tether.continuous.connectivity.potential`; line-of-sight clearance ``d_ijo`` comes
 from the world layer's :class:`tether.world.clearance.ObstacleIndex`.
 """
 
@@ -32,8 +32,8 @@ from functools import cache
 import numpy as np
 
 from tether import floats, jit
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.potential import smooth_step, smooth_step_log_derivative
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.potential import smooth_step, smooth_step_log_derivative
 from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
 from tether.graph.fiedler import Method, _syevr_lwork
 from tether.graph.warm import WarmState
@@ -169,16 +169,16 @@ def compute_weights(
         The Fiedler vector the caller will pass to :meth:`WeightedGraph.fiedler`: with
         the kernels, a team of ``DENSE_MAX_N < n <= SUBSET_MAX_N`` robots gets its
         eigenpair in the same compiled call as its weights
-        (:func:`tether.continuous.kernels.evaluate_fiedler_kernel`);
+        (:func:`tether.continuous.connectivity.kernels.evaluate_fiedler_kernel`);
         ``fiedler(guess=guess, method=method)`` then returns it (the same bits as
         computing it there).
     method
         The ``fiedler`` method that eigenpair is for: ``"auto"`` or ``"lapack"``.
     with_force
         With that eigenpair, the force of eq. (17) too (in the same call):
-        :func:`tether.continuous.gradient.exact_force` then returns it (same bits).
+        :func:`tether.continuous.connectivity.gradient.exact_force` then returns it (same bits).
 
-    With :func:`tether.jit.enabled`, the kernels of :mod:`tether.continuous.kernels`
+    With :func:`tether.jit.enabled`, the kernels of :mod:`tether.continuous.connectivity.kernels`
     compute the same arrays (to the last bit) without numpy's per-call overhead.
     """
     q = np.asarray(positions, dtype=float)
@@ -200,8 +200,8 @@ def _compute_weights_kernel(
     pairs: np.ndarray,
 ) -> WeightedGraph:
     """:func:`compute_weights` of given pairs by the kernels of
-    :mod:`tether.continuous.kernels` (same bits)."""
-    from tether.continuous import kernels as k
+    :mod:`tether.continuous.connectivity.kernels` (same bits)."""
+    from tether.continuous.connectivity import kernels as k
 
     q = np.ascontiguousarray(q)
     n = len(q)
@@ -230,7 +230,7 @@ def _kernels() -> tuple:
     """``evaluate_kernel``, ``evaluate_fiedler_kernel``, ``evaluate_fiedler_free_kernel``
     and ``no_obstacles``, imported on first use (numba only when kernels run; an import
     statement in the hot function costs microseconds per call)."""
-    from tether.continuous import kernels as k
+    from tether.continuous.connectivity import kernels as k
 
     return k.evaluate_kernel, k.evaluate_fiedler_kernel, k.evaluate_fiedler_free_kernel, \
         k.no_obstacles  # fmt: skip

@@ -3,11 +3,11 @@
 Each kernel does its reference's arithmetic in its reference's order, so both give the same
 bits (``tests/test_dynamics.py``):
 
-* :func:`step_kernel`: :func:`tether.continuous.robot.damped_step` and
-  :func:`~tether.continuous.robot.dissipation`, then
-  :func:`~tether.continuous.robot.stay_inside` if ``box`` has two rows;
-* :func:`displacement_kernel`: :func:`tether.continuous.dynamics.displacement_step`;
-* :func:`terms_kernel`: :func:`tether.continuous.dynamics.substep_terms`.
+* :func:`step_kernel`: :func:`tether.continuous.connectivity.robot.damped_step` and
+  :func:`~tether.continuous.connectivity.robot.dissipation`, then
+  :func:`~tether.continuous.connectivity.robot.stay_inside` if ``box`` has two rows;
+* :func:`displacement_kernel`: :func:`tether.continuous.connectivity.dynamics.displacement_step`;
+* :func:`terms_kernel`: :func:`tether.continuous.connectivity.dynamics.substep_terms`.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from numba import njit
 @njit(cache=True)
 def step_kernel(q, v, force, h, mass, damping, vmax, beta, box, margin):  # noqa: ANN001, ANN201
     """``(q+, v+, contacts, dissipated, speed_limit)``:
-    :func:`~tether.continuous.robot.damped_step` (``vmax = inf``: linear damping) and its
-    :func:`~tether.continuous.robot.dissipation`, then the box (``contacts``: velocity
-    components stopped by a wall)."""
+    :func:`~tether.continuous.connectivity.robot.damped_step` (``vmax = inf``: linear
+    damping) and its :func:`~tether.continuous.connectivity.robot.dissipation`, then the box
+    (``contacts``: velocity components stopped by a wall)."""
     n, dim = q.shape
     q_new = np.empty((n, dim))
     v_new = np.empty((n, dim))
@@ -68,7 +68,8 @@ def step_kernel(q, v, force, h, mass, damping, vmax, beta, box, margin):  # noqa
 
 @njit(cache=True)
 def displacement_kernel(v, force, mass, delta):  # noqa: ANN001, ANN201
-    """:func:`~tether.continuous.dynamics.displacement_step` (``inf`` if nothing moves)."""
+    """:func:`~tether.continuous.connectivity.dynamics.displacement_step` (``inf`` if
+    nothing moves)."""
     n, dim = v.shape
     vmax, fmax = 0.0, 0.0
     for r in range(n):
@@ -85,7 +86,7 @@ def displacement_kernel(v, force, mass, delta):  # noqa: ANN001, ANN201
 
 @njit(cache=True)
 def terms_kernel(q, v, q1, v1, f, f1, f_c, pairs, h, mass):  # noqa: ANN001, ANN201
-    """:func:`~tether.continuous.dynamics.substep_terms` as a tuple of six floats."""
+    """:func:`~tether.continuous.connectivity.dynamics.substep_terms` as a tuple of six floats."""
     n, dim = q.shape
     dq = np.empty(n)
     df = np.empty(n)

@@ -1,12 +1,13 @@
 """Integration of eq. (1) for a stiff barrier: step rules that follow the force, and a guard.
 
-The robot model (:mod:`tether.continuous.robot`) is stepped by semi-implicit Euler,
-:func:`~tether.continuous.robot.damped_step`. The connectivity potential of App. A grows
-without bound as lambda2 falls to ``lambda2_min`` (and the anchor potential of eq. (6) at
-the rim of its ball), so the force is stiff exactly where it matters: an explicit step
-that is too long there overshoots into the barrier, meets a huge force and throws the
-robot back with more energy than it had. Inside each control period ``dt`` the step
-``h`` is therefore chosen by two rules and checked a posteriori:
+The robot model (:mod:`tether.continuous.connectivity.robot`) is stepped by
+semi-implicit Euler, :func:`~tether.continuous.connectivity.robot.damped_step`. The
+connectivity potential of App. A grows without bound as lambda2 falls to ``lambda2_min``
+(and the anchor potential of eq. (6) at the rim of its ball), so the force is stiff
+exactly where it matters: an explicit step that is too long there overshoots into the
+barrier, meets a huge force and throws the robot back with more energy than it had.
+Inside each control period ``dt`` the step ``h`` is therefore chosen by two rules and
+checked a posteriori:
 
 1. **Displacement rule.** No robot moves more than ``max_step_m`` in one sub-step (a
    tenth of the narrowest transition band of the weights): ``h |v| + h^2 |f| / m <=
@@ -69,7 +70,7 @@ from typing import Any, Literal, Protocol
 import numpy as np
 
 from tether import jit
-from tether.continuous.robot import RobotModel, damped_step, dissipation, stay_inside
+from tether.continuous.connectivity.robot import RobotModel, damped_step, dissipation, stay_inside
 
 Guard = Literal["enforce", "detect", "off"]
 GUARDS: tuple[str, ...] = ("enforce", "detect", "off")
@@ -176,7 +177,7 @@ class StepMemory:
 def displacement_step(v: np.ndarray, force: np.ndarray, mass: float, delta_m: float) -> float:
     """The largest ``h`` with ``h |v_i| + h^2 |f_i| / m <= delta_m`` for every robot."""
     if jit.enabled():
-        from tether.continuous.dynamics_kernels import displacement_kernel
+        from tether.continuous.connectivity.dynamics_kernels import displacement_kernel
 
         return float(displacement_kernel(np.ascontiguousarray(v, dtype=float),
                                          np.ascontiguousarray(force, dtype=float), mass,
@@ -197,10 +198,10 @@ def robot_step(
     box: np.ndarray | None = None,
     margin_m: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, int, float, float]:
-    """:func:`~tether.continuous.robot.damped_step` then the box: ``(q+, v+, contacts,
-    dissipated, speed_limit)`` (:func:`~tether.continuous.robot.dissipation`)."""
+    """:func:`~tether.continuous.connectivity.robot.damped_step` then the box: ``(q+, v+, contacts,
+    dissipated, speed_limit)`` (:func:`~tether.continuous.connectivity.robot.dissipation`)."""
     if jit.enabled():
-        from tether.continuous.dynamics_kernels import step_kernel
+        from tether.continuous.connectivity.dynamics_kernels import step_kernel
 
         corners = np.zeros((0, q.shape[1])) if box is None else np.ascontiguousarray(box, float)
         return step_kernel(np.ascontiguousarray(q, dtype=float),
@@ -242,7 +243,7 @@ def substep_terms(
     acceleration ``|v+ - v| / h`` of a robot.
     """
     if jit.enabled():
-        from tether.continuous.dynamics_kernels import terms_kernel
+        from tether.continuous.connectivity.dynamics_kernels import terms_kernel
 
         c = np.ascontiguousarray
         return terms_kernel(c(q, dtype=float), c(v, dtype=float), c(q1, dtype=float),
@@ -298,7 +299,7 @@ def integrate(
         ``system.evaluate(q)`` if already known (reused from the previous period).
     box, box_margin_m
         ``(2, dim)`` lower and upper corners of the world, kept ``box_margin_m`` away
-        (:func:`~tether.continuous.robot.stay_inside`); ``None`` for unbounded space.
+        (:func:`~tether.continuous.connectivity.robot.stay_inside`); ``None`` for unbounded space.
     memory
         The step rule's memory, carried from period to period (updated in place).
 

@@ -45,9 +45,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from tether import jit
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.potential import potential_slope
-from tether.continuous.weights import WeightedGraph
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.potential import potential_slope
+from tether.continuous.connectivity.weights import WeightedGraph
 
 
 @dataclass
@@ -62,7 +62,7 @@ class Messages:
 def edge_energy(graph: WeightedGraph, nu: np.ndarray) -> np.ndarray:
     """``T_i = sum_j W_ij (nu_i - nu_j)^2`` per robot (computable by robot ``i``)."""
     if jit.enabled():
-        from tether.continuous.force_kernels import edge_energy_kernel
+        from tether.continuous.connectivity.force_kernels import edge_energy_kernel
 
         return edge_energy_kernel(graph.n, graph.pairs, graph.pair_factor, graph.collision,
                                   np.ascontiguousarray(nu, dtype=float))  # fmt: skip
@@ -86,7 +86,7 @@ def lambda2_gradient(graph: WeightedGraph, msg: Messages) -> np.ndarray:
     the exact gradient of lambda2 (where lambda2 is simple).
     """
     if jit.enabled() and graph.dP_di.ndim == 2:
-        from tether.continuous.force_kernels import gradient_kernel
+        from tether.continuous.connectivity.force_kernels import gradient_kernel
 
         return gradient_kernel(
             graph.n, graph.pairs, graph.dP_di, graph.dP_dj, graph.coll_pairs, graph.coll_unit,
@@ -118,7 +118,7 @@ def connectivity_force(
     lam = np.broadcast_to(np.asarray(lambda2, dtype=float), (graph.n,))
     grad = lambda2_gradient(graph, msg)
     if jit.enabled():
-        from tether.continuous.force_kernels import force_kernel
+        from tether.continuous.connectivity.force_kernels import force_kernel
 
         return force_kernel(grad, np.ascontiguousarray(lam), params.lambda2_min,
                             params.lambda2_null, params.potential_gain)  # fmt: skip
@@ -132,14 +132,14 @@ def exact_force(
 
     The force of the exact eigenpair (every robot's messages from the same ``nu``); with
     the kernels one compiled call, the same bits as the chain; none when the weights'
-    kernel call made it already (:func:`tether.continuous.weights.compute_weights` with
+    kernel call made it already (:func:`tether.continuous.connectivity.weights.compute_weights` with
     ``with_force``: the same kernel on the same arrays).
     """
     done = graph.cached_force(lambda2, nu, params)
     if done is not None:
         return done
     if jit.enabled() and graph.dP_di.ndim == 2:
-        from tether.continuous.force_kernels import exact_force_kernel
+        from tether.continuous.connectivity.force_kernels import exact_force_kernel
 
         return exact_force_kernel(
             graph.n, graph.pairs, graph.pair_factor, graph.collision, graph.dP_di, graph.dP_dj,

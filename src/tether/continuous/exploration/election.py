@@ -129,7 +129,10 @@ class Election:
         m = self.msg
         fast = jit.enabled()
         if fast:
-            from tether.continuous.round_kernels import election_busy_after, election_busy_before
+            from tether.continuous.exploration.round_kernels import (
+                election_busy_after,
+                election_busy_before,
+            )
         if not fast or election_busy_before(self.token, m, self.opened_round, self.joined,
                                             wants_election, candidate, IDLE, ACTIVE, NO_TOKEN,
                                             EPOCH, RESULT):  # fmt: skip
@@ -138,7 +141,7 @@ class Election:
         inbox = self.layer.exchange(pairs, m)
         self.rounds += 1
         if fast:  # the same merge, compiled
-            from tether.continuous.round_kernels import merge_kernel
+            from tether.continuous.exploration.round_kernels import merge_kernel
 
             merge_kernel(m, inbox.receiver, inbox.values, inbox.valid, _GROUPS, EPOCH, BEST,
                          BEST_IDX)  # fmt: skip

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.weights import compute_weights
 from tether.world.clearance import ObstacleIndex
 from tether.world.world import World
 

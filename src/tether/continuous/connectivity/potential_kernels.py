@@ -1,9 +1,9 @@
-"""Compiled smooth steps of :mod:`tether.continuous.potential` (numba, lazy).
+"""Compiled smooth steps of :mod:`tether.continuous.connectivity.potential` (numba, lazy).
 
 ``S(x; lo, hi)`` with its derivative (:func:`smooth_step1`) and its log-derivative
 (:func:`log_derivative1`), one value at a time, with the arithmetic of the numpy
 reference in the same order (``scipy.special.expit(x)`` is ``1 / (1 + exp(-x))``), so
-the same bits; the kernels of :mod:`tether.continuous.kernels` build the weights of
+the same bits; the kernels of :mod:`tether.continuous.connectivity.kernels` build the weights of
 App. A from them. (Over a whole array in phases, divisions first and each ``exp`` in
 its own loop, they were no faster for 200 links: the scalar loop already overlaps.)
 """
@@ -34,7 +34,7 @@ def _band(x, lo, hi):  # noqa: ANN001, ANN202
 
 @njit(cache=True, inline="always")
 def smooth_step1(x, lo, hi):  # noqa: ANN001, ANN202
-    """``(S(x; lo, hi), dS/dx)`` of :func:`tether.continuous.potential.smooth_step`."""
+    """``(S(x; lo, hi), dS/dx)`` of :func:`tether.continuous.connectivity.potential.smooth_step`."""
     inside, t, g, c, width = _band(x, lo, hi)
     if inside:
         s_in = 1.0 / (1.0 + math.exp(g))  # expit(-g)
@@ -45,7 +45,8 @@ def smooth_step1(x, lo, hi):  # noqa: ANN001, ANN202
 
 @njit(cache=True, inline="always")
 def log_derivative1(x, lo, hi):  # noqa: ANN001, ANN202
-    """``S'(x) / S(x)`` of :func:`tether.continuous.potential.smooth_step_log_derivative`."""
+    """``S'(x) / S(x)`` of
+    :func:`tether.continuous.connectivity.potential.smooth_step_log_derivative`."""
     inside, _, g, c, width = _band(x, lo, hi)
     if inside:
         return 1.0 / (1.0 + math.exp(-g)) * c / width

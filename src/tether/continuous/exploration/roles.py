@@ -4,9 +4,9 @@ Four roles: ``connector`` (no target, ``f_i = 0``), ``prime`` (the one traveler
 whose target has priority), ``secondary`` (travelers scaled by ``rho``) and
 ``anchor`` (within ``Rz`` of its target, staying for ``Delta t``). Each robot
 decides from its own position, its own target queue and the election's outcome
-(:mod:`tether.continuous.election`). Paths are A* on the inflated 3-D grid of
+(:mod:`tether.continuous.exploration.election`). Paths are A* on the inflated 3-D grid of
 cell ``Rgrid`` smoothed by a B-spline (:mod:`tether.paths`), sampled for the
-control loop (:mod:`tether.continuous.tracking`).
+control loop (:mod:`tether.continuous.exploration.tracking`).
 
 Beyond the paper: a target that cannot be reached (no path) or that expires
 (``timeout_s``) is dropped with an event and the robot moves on to its next
@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 
 from tether import floats, jit
-from tether.continuous.targets import Target, TargetBook
-from tether.continuous.tracking import PathSet, TrackedPath
+from tether.continuous.exploration.targets import Target, TargetBook
+from tether.continuous.exploration.tracking import PathSet, TrackedPath
 from tether.paths.astar import plan_path, planning_grid
 from tether.paths.bspline import smooth_path
 from tether.world.world import World

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import expit
 
-from tether.continuous.params import ConnectivityParams
+from tether.continuous.connectivity.params import ConnectivityParams
 
 
 def smooth_step(x: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:

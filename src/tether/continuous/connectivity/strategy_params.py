@@ -2,8 +2,8 @@
 
 ``preset`` picks a column of Table 2 of the continuous-connectivity paper; any parameter
 given explicitly overrides it. The robot model (mass, damping, speed bound) and the
-guard are explained in :mod:`tether.continuous.robot` and
-:mod:`tether.continuous.dynamics`; ``docs/continuous.md`` lists every key with its
+guard are explained in :mod:`tether.continuous.connectivity.robot` and
+:mod:`tether.continuous.connectivity.dynamics`; ``docs/continuous.md`` lists every key with its
 default and why.
 """
 
@@ -13,11 +13,11 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from tether.continuous.dynamics import GUARDS, IntegratorParams
-from tether.continuous.estimation import EstimatorParams
-from tether.continuous.external import ExternalForce
-from tether.continuous.params import TABLE2, TRAVEL_TABLE2, ConnectivityParams
-from tether.continuous.robot import RobotModel
+from tether.continuous.connectivity.dynamics import GUARDS, IntegratorParams
+from tether.continuous.connectivity.estimation import EstimatorParams
+from tether.continuous.connectivity.external import ExternalForce
+from tether.continuous.connectivity.params import TABLE2, TRAVEL_TABLE2, ConnectivityParams
+from tether.continuous.connectivity.robot import RobotModel
 
 _OUTDOOR = TABLE2["outdoor"]
 

@@ -55,7 +55,7 @@ import scipy.sparse as sp
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.weights import WeightedGraph
+from tether.continuous.connectivity.weights import WeightedGraph
 
 
 class EstimatorParams(BaseModel):

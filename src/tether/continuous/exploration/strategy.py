@@ -26,21 +26,33 @@ import numpy as np
 
 from tether import floats, jit
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.consensus import EfficiencyConsensus
-from tether.continuous.dynamics import displacement_step
-from tether.continuous.election import Election
-from tether.continuous.external import check_failures
-from tether.continuous.motion import anchor_targets, travel_args, travel_gains, traveling_forces
-from tether.continuous.multi_target_checks import check_planning_grid, target_book
-from tether.continuous.multi_target_params import MultiTargetParams
-from tether.continuous.placement import safe_team
-from tether.continuous.recruit import HelpFlood, RequestDepth, help_force
-from tether.continuous.reference_filter import ReferenceFilter
-from tether.continuous.roles import ANCHOR, CONNECTOR, PRIME, ROLE_NAMES, SECONDARY, RolePlanner
-from tether.continuous.strategy import ConnectivityStrategy
-from tether.continuous.substep import fused_total_force
-from tether.continuous.targets import TargetBook, outside_heights
-from tether.continuous.travel import efficiency
+from tether.continuous.connectivity.dynamics import displacement_step
+from tether.continuous.connectivity.external import check_failures
+from tether.continuous.connectivity.placement import safe_team
+from tether.continuous.connectivity.strategy import ConnectivityStrategy
+from tether.continuous.exploration.checks import check_planning_grid, target_book
+from tether.continuous.exploration.consensus import EfficiencyConsensus
+from tether.continuous.exploration.election import Election
+from tether.continuous.exploration.motion import (
+    anchor_targets,
+    travel_args,
+    travel_gains,
+    traveling_forces,
+)
+from tether.continuous.exploration.params import MultiTargetParams
+from tether.continuous.exploration.recruit import HelpFlood, RequestDepth, help_force
+from tether.continuous.exploration.reference_filter import ReferenceFilter
+from tether.continuous.exploration.roles import (
+    ANCHOR,
+    CONNECTOR,
+    PRIME,
+    ROLE_NAMES,
+    SECONDARY,
+    RolePlanner,
+)
+from tether.continuous.exploration.substep import fused_total_force
+from tether.continuous.exploration.targets import TargetBook, outside_heights
+from tether.continuous.exploration.travel import efficiency
 from tether.errors import ScenarioError
 from tether.registry import STRATEGIES
 from tether.sim import StepContext, TeamState
@@ -49,10 +61,10 @@ from tether.world.world import World
 
 @cache
 def _kernels() -> SimpleNamespace:
-    """:mod:`tether.continuous.pair_kernels` and :mod:`~tether.continuous.bookkeep_kernels`,
-    imported on first use (they load numba; an import statement per call costs
-    microseconds)."""
-    from tether.continuous import bookkeep_kernels, pair_kernels
+    """:mod:`tether.continuous.connectivity.pair_kernels` and
+    :mod:`~tether.continuous.connectivity.bookkeep_kernels`, imported on first use (they
+    load numba; an import statement per call costs microseconds)."""
+    from tether.continuous.connectivity import bookkeep_kernels, pair_kernels
 
     return SimpleNamespace(
         any_row_beyond=pair_kernels.any_row_beyond,
@@ -64,7 +76,7 @@ def _anchor_leaves(q: np.ndarray, held: np.ndarray, targets: np.ndarray, rz_m: f
     """True if an anchored robot ``held[k]`` is ``Rz`` or farther from ``targets[k]``.
 
     ``q`` is ``(n, dim)``, ``targets`` ``(len(held), dim)``. With the kernels, one
-    compiled call (:func:`tether.continuous.pair_kernels.any_row_beyond`, the same
+    compiled call (:func:`tether.continuous.connectivity.pair_kernels.any_row_beyond`, the same
     distances as ``numpy.linalg.norm``); the numpy test otherwise (the reference).
     """
     if jit.enabled():
@@ -81,7 +93,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
 
     name = "multi_target"
     Params = MultiTargetParams
-    force_with_weights = False  # the fused sub-step (continuous/substep.py) makes the force
+    force_with_weights = False  # the fused sub-step (exploration/substep.py) makes the force
 
     def __init__(self, params: MultiTargetParams, book: TargetBook) -> None:
         super().__init__(params)
@@ -292,7 +304,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
                    ) -> np.ndarray:  # fmt: skip
             """Recruited robots follow their parent instead (a secondary's ``f_i`` too);
             with ``help_lambda_factor`` their ``f_lambda`` is scaled by it
-            (:mod:`~tether.continuous.recruit`)."""
+            (:mod:`~tether.continuous.exploration.recruit`)."""
             f[helpers] = help_force(qq[helpers], vv[helpers], parents_m, keep_m=p.rs_inner_m,
                                     kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
                                     max_force_n=p.max_travel_force_n)  # fmt: skip

@@ -2,16 +2,16 @@
 
 Each robot obeys ``M dv/dt = -B v + f_lambda + f_ext`` (eq. (1)), where
 ``f_lambda`` is the generalized connectivity force (App. A, eq. (17)-(18),
-:mod:`tether.continuous.gradient`) and ``f_ext`` a bounded external force
+:mod:`tether.continuous.connectivity.gradient`) and ``f_ext`` a bounded external force
 standing in for the traveling force of Algorithm 2: nothing, constant
 forces, operator goals (a saturated spring to a goal point) or random pulls
 (a random direction and magnitude per robot, redrawn every ``hold_s``).
 
 lambda2 and the Fiedler vector come either from an exact eigensolver
 (``eigensolver: exact``) or from the decentralized estimator of Yang et al.
-(``eigensolver: estimator``, :mod:`tether.continuous.estimation`) running over
+(``eigensolver: estimator``, :mod:`tether.continuous.connectivity.estimation`) running over
 the message layer (:mod:`tether.comm`) with optional loss, delay and robot
-failures. The motion is integrated by :func:`tether.continuous.dynamics.integrate`.
+failures. The motion is integrated by :func:`tether.continuous.connectivity.dynamics.integrate`.
 
 Example scenario (``src/tether/scenarios/connectivity_town.yaml``)::
 
@@ -31,14 +31,22 @@ import numpy as np
 
 from tether import jit
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.dynamics import IntegrationStats, StepMemory, displacement_step, integrate
-from tether.continuous.estimation import FiedlerEstimator, estimate_errors
-from tether.continuous.external import check_external, external_force
-from tether.continuous.gradient import connectivity_force, exact_force, messages
-from tether.continuous.params import ConnectivityParams
-from tether.continuous.potential import potential
-from tether.continuous.strategy_params import ConnectivityStrategyParams, ContinuousParams
-from tether.continuous.weights import compute_weights
+from tether.continuous.connectivity.dynamics import (
+    IntegrationStats,
+    StepMemory,
+    displacement_step,
+    integrate,
+)
+from tether.continuous.connectivity.estimation import FiedlerEstimator, estimate_errors
+from tether.continuous.connectivity.external import check_external, external_force
+from tether.continuous.connectivity.gradient import connectivity_force, exact_force, messages
+from tether.continuous.connectivity.params import ConnectivityParams
+from tether.continuous.connectivity.potential import potential
+from tether.continuous.connectivity.strategy_params import (
+    ConnectivityStrategyParams,
+    ContinuousParams,
+)
+from tether.continuous.connectivity.weights import compute_weights
 from tether.errors import ScenarioError
 from tether.graph.warm import WarmState
 from tether.registry import STRATEGIES
@@ -231,7 +239,7 @@ class ConnectivityStrategy(Strategy):
         if np.isfinite(lam):
             self._min["lambda2"] = min(self._min["lambda2"], float(lam))
         if len(graph.pairs) and jit.enabled():  # the same minimum, compiled
-            from tether.continuous.bookkeep_kernels import min_link_distance_kernel
+            from tether.continuous.connectivity.bookkeep_kernels import min_link_distance_kernel
 
             d_min = min_link_distance_kernel(np.ascontiguousarray(q, dtype=float),
                                              np.ascontiguousarray(graph.pairs))  # fmt: skip

@@ -138,7 +138,8 @@ class PathSet:
         )
 
     def kernel_args(self) -> tuple[np.ndarray, ...]:
-        """The arrays :func:`~tether.continuous.tracking_kernels.path_states_kernel` reads.
+        """The arrays
+        :func:`~tether.continuous.exploration.tracking_kernels.path_states_kernel` reads.
 
         Segment ranges per path, the segment arrays, cumulative chord lengths (for its
         skipping) and each path's last closest segment (a hint it updates); made once.
@@ -158,7 +159,7 @@ class PathSet:
         """``(s, point, distance, remaining, tangent, d2p/ds2)`` at the closest points.
 
         The speed-free part of :meth:`states`, by
-        :func:`~tether.continuous.tracking_kernels.path_states_kernel` (same bits); the
+        :func:`~tether.continuous.exploration.tracking_kernels.path_states_kernel` (same bits); the
         last positions' answer is kept, so asking again for the same ``q`` (the roles,
         then the election) costs a comparison.
         """
@@ -166,7 +167,7 @@ class PathSet:
         last = self._last
         if last is not None and last[0].shape == q.shape and (last[0] == q).all():
             return last[1]
-        from tether.continuous.tracking_kernels import path_states_kernel
+        from tether.continuous.exploration.tracking_kernels import path_states_kernel
         from tether.world.clearance import einsum_order
 
         args = self.kernel_args()
@@ -178,7 +179,9 @@ class PathSet:
         return self._last[1]
 
     def _states_kernel(self, q: np.ndarray, v_cruise_mps: np.ndarray | float) -> PathState:
-        """:meth:`states` by :func:`tether.continuous.kernels.path_states_kernel` (same bits)."""
+        """:meth:`states` by
+        :func:`tether.continuous.exploration.tracking_kernels.path_states_kernel` (same
+        bits)."""
         s_best, point, dist, remaining, tan, kap = self.closest(q)
         # velocity and acceleration in the kernel's arithmetic: v T and v^2 d2p/ds2
         v = np.asarray(v_cruise_mps, dtype=float) * ((self.lengths - s_best) > 1e-9)

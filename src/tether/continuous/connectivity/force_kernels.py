@@ -1,13 +1,13 @@
 """Compiled kernels of a sub-step's forces and motion (numba, lazy).
 
-The fast paths of :func:`tether.continuous.gradient.edge_energy`,
-:func:`~tether.continuous.gradient.lambda2_gradient` and
-:func:`~tether.continuous.gradient.connectivity_force` (eqs. (17)-(18)), each in its
+The fast paths of :func:`tether.continuous.connectivity.gradient.edge_energy`,
+:func:`~tether.continuous.connectivity.gradient.lambda2_gradient` and
+:func:`~tether.continuous.connectivity.gradient.connectivity_force` (eqs. (17)-(18)), each in its
 reference's arithmetic and order (same bits; ``tests/test_kernels.py``).
 
 :func:`total_force_kernel` is one ``multi_target`` sub-step's total force and step:
 the reference is a chain of calls (``connectivity_force``, then
-:func:`tether.continuous.multi_target.traveling_forces`, a sum, then the displacement
+:func:`tether.continuous.exploration.motion.traveling_forces`, a sum, then the displacement
 rule) whose Python glue cost more than the arithmetic for 35 robots; it calls the same
 kernels in the same order from compiled code, so the forces and the step are the same
 bits.
@@ -18,13 +18,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from tether.continuous.dynamics_kernels import displacement_kernel
-from tether.continuous.tracking_kernels import traveling_kernel
+from tether.continuous.connectivity.dynamics_kernels import displacement_kernel
+from tether.continuous.exploration.tracking_kernels import traveling_kernel
 
 
 @njit(cache=True)
 def edge_energy_kernel(n, pairs, pair_factor, collision, nu):  # noqa: ANN001, ANN201
-    """``T_i = sum_j W_ij (nu_i - nu_j)^2`` as :func:`~tether.continuous.gradient.edge_energy`."""
+    """``T_i = sum_j W_ij (nu_i - nu_j)^2`` as
+    :func:`~tether.continuous.connectivity.gradient.edge_energy`."""
     first = np.zeros(n)
     second = np.zeros(n)
     for k in range(len(pairs)):
@@ -44,7 +45,8 @@ def edge_energy_kernel(n, pairs, pair_factor, collision, nu):  # noqa: ANN001, A
 def gradient_kernel(  # noqa: ANN201, PLR0913
     n, pairs, dP_di, dP_dj, coll_pairs, coll_unit, coll_logd, nu, collision, energy
 ):  # noqa: ANN001
-    """``dlambda2/dq`` as :func:`~tether.continuous.gradient.lambda2_gradient`, ``(n, dim)``."""
+    """``dlambda2/dq`` as :func:`~tether.continuous.connectivity.gradient.lambda2_gradient`,
+    ``(n, dim)``."""
     dim = dP_di.shape[1]
     grad = np.zeros((n, dim))
     m = len(pairs)
@@ -73,10 +75,11 @@ def gradient_kernel(  # noqa: ANN201, PLR0913
 
 @njit(cache=True)
 def force_kernel(grad, lam, lo, hi, gain):  # noqa: ANN001, ANN201
-    """``-dV/dlambda2 * grad`` per robot (:func:`~tether.continuous.gradient.connectivity_force`).
+    """``-dV/dlambda2 * grad`` per robot
+    (:func:`~tether.continuous.connectivity.gradient.connectivity_force`).
 
     ``lam`` is each robot's lambda2 ``(n,)``; the slope is
-    :func:`~tether.continuous.potential.potential_slope`.
+    :func:`~tether.continuous.connectivity.potential.potential_slope`.
     """
     n, dim = grad.shape
     out = np.empty((n, dim))
@@ -111,10 +114,11 @@ def total_force_kernel(  # noqa: ANN201, PLR0913
     the displacement step and the two forces it sums.
 
     ``graph``: ``(pairs, pair_factor, collision, dP_di, dP_dj, coll_pairs, coll_unit,
-    coll_logd)`` of a :class:`~tether.continuous.weights.WeightedGraph`; ``nu``, ``lam``
-    its Fiedler vector and lambda2; ``potential``: ``(lambda2_min, lambda2_null, gain)``;
-    ``travel``: ``(kp, kv, mass, damping, max_force, sigma, rz, kz, anchor_max)`` and the other
-    arguments as :func:`~tether.continuous.tracking_kernels.traveling_kernel` takes them;
+    coll_logd)`` of a :class:`~tether.continuous.connectivity.weights.WeightedGraph`;
+    ``nu``, ``lam`` its Fiedler vector and lambda2; ``potential``: ``(lambda2_min,
+    lambda2_null, gain)``; ``travel``: ``(kp, kv, mass, damping, max_force, sigma, rz, kz,
+    anchor_max)`` and the other arguments as
+    :func:`~tether.continuous.exploration.tracking_kernels.traveling_kernel` takes them;
     ``mass``, ``delta``: the displacement rule's (``inf`` step if nothing moves).
     """
     n = q.shape[0]
@@ -134,7 +138,8 @@ def total_force_kernel(  # noqa: ANN201, PLR0913
 
 def warm_up(q: np.ndarray, pairs: np.ndarray, graph: tuple, nu: np.ndarray) -> None:
     """Compile (or load) every kernel here on a tiny team: ``graph`` is
-    :func:`~tether.continuous.kernels.weights_kernel`'s output for ``q``, ``pairs``."""
+    :func:`~tether.continuous.connectivity.kernels.weights_kernel`'s output for ``q``,
+    ``pairs``."""
     pf, dP_di, dP_dj, _, coll, cp, cu, cl = graph
     n = len(q)
     energy = edge_energy_kernel(n, pairs, pf, coll, nu)

@@ -35,7 +35,7 @@ reach a target beyond the loop's reach (``docs/multi_target.md``, *The dropped
 target*). Scaled down, it lets the helpers' pull towards their parents (a
 breadth-first tree rooted at the prime) win over the defence of links the prime
 does not need. Connectivity still holds: the integrator accepts a sub-step only if
-lambda2 keeps half its margin (:mod:`tether.continuous.dynamics`), and the other
+lambda2 keeps half its margin (:mod:`tether.continuous.connectivity.dynamics`), and the other
 robots' force is unchanged. Measured on the campaign's helped trials with
 ``benchmarks/rerun_helped.py`` (``docs/multi_target.md``).
 """
@@ -45,7 +45,7 @@ from __future__ import annotations
 import numpy as np
 
 from tether.comm import MessageLayer, smallest_per_receiver
-from tether.continuous.travel import saturate
+from tether.continuous.exploration.travel import saturate
 
 NO_HELP = np.inf
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from tether import floats
-from tether.continuous.tracking import PathState
+from tether.continuous.exploration.tracking import PathState
 
 
 def travel_force(

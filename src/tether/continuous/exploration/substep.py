@@ -1,13 +1,14 @@
 """The fused force of a ``multi_target`` sub-step: one compiled call instead of a chain.
 
 :func:`fused_total_force` makes the ``forces`` of
-:class:`tether.continuous.dynamics.System` for one control period: it computes
+:class:`tether.continuous.connectivity.dynamics.System` for one control period: it computes
 ``f_lambda`` (eq. (17)) as :meth:`ConnectivityStrategy.connectivity_force
-<tether.continuous.strategy.ConnectivityStrategy.connectivity_force>` does, the traveling force of
-Algorithm 2 as :func:`tether.continuous.multi_target.traveling_forces` does, their sum
-and the displacement rule's step, in one call of
-:func:`~tether.continuous.force_kernels.total_force_kernel` (the same kernels in the
-same order, so the same bits). Used when :func:`tether.jit.enabled` and the exact
+<tether.continuous.connectivity.strategy.ConnectivityStrategy.connectivity_force>` does,
+the traveling force of Algorithm 2 as
+:func:`tether.continuous.exploration.motion.traveling_forces` does, their sum and the
+displacement rule's step, in one call of
+:func:`~tether.continuous.connectivity.force_kernels.total_force_kernel` (the same kernels
+in the same order, so the same bits). Used when :func:`tether.jit.enabled` and the exact
 eigensolver runs; the reference is the chain itself.
 """
 
@@ -18,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from tether.continuous.strategy import ConnectivityStrategy
+from tether.continuous.connectivity.strategy import ConnectivityStrategy
 
 #: adjust(q, v, f_lambda, f_i) -> f_i: a change of the external force after the kernel
 Adjust = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -41,17 +42,18 @@ def fused_total_force(
         mass and displacement bound).
     travel, gains
         The traveling kernel's arguments a period fixes
-        (:func:`tether.continuous.multi_target.travel_args`) and its gains
-        (:func:`tether.continuous.multi_target.travel_gains`).
+        (:func:`tether.continuous.exploration.motion.travel_args`) and its gains
+        (:func:`tether.continuous.exploration.motion.travel_gains`).
     adjust
         If the strategy's external force is the traveling force changed afterwards (some
         rows replaced), that change: it gets the kernel's ``f_lambda`` and ``f_i`` and
         returns the external force; the sum and the step are then made from it as the
-        reference makes them (:func:`~tether.continuous.force_kernels.displacement_kernel`).
+        reference makes them
+        (:func:`~tether.continuous.connectivity.dynamics_kernels.displacement_kernel`).
         Without it the fused call would leave the change out.
     """
-    from tether.continuous.dynamics_kernels import displacement_kernel
-    from tether.continuous.force_kernels import total_force_kernel
+    from tether.continuous.connectivity.dynamics_kernels import displacement_kernel
+    from tether.continuous.connectivity.force_kernels import total_force_kernel
 
     conn, integ = strategy.conn, strategy.integ
     potential = (float(conn.lambda2_min), float(conn.lambda2_null), float(conn.potential_gain))

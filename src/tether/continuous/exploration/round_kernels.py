@@ -1,7 +1,7 @@
 """Compiled updates of the message rounds: the election's merge, the consensus step (numba).
 
-The fast paths of :meth:`tether.continuous.election.Election._merge` and of the update
-of :meth:`tether.continuous.consensus.EfficiencyConsensus.round`, used when
+The fast paths of :meth:`tether.continuous.exploration.election.Election._merge` and of the update
+of :meth:`tether.continuous.exploration.consensus.EfficiencyConsensus.round`, used when
 :func:`tether.jit.enabled`. Each robot is updated from its own row and the messages in
 its inbox only (what :class:`tether.comm.MessageLayer` delivered), exactly as the numpy
 reference does it: the same winners, the same rows adopted (the first in inbox order
@@ -87,7 +87,7 @@ def consensus_kernel(estimate, recv, values, valid, gain_dt):  # noqa: ANN001, A
 @njit(cache=True)
 def election_busy_before(token, msg, opened_round, joined, wants, candidate, idle, active,
                          no_token, epoch, result):  # noqa: ANN001, ANN201  # fmt: skip
-    """Whether a round of :meth:`~tether.continuous.election.Election.round` opens an
+    """Whether a round of :meth:`~tether.continuous.exploration.election.Election.round` opens an
     election or takes a candidacy before its exchange (the same tests, robot by robot).
 
     False lets the caller skip both steps: they would do nothing.
@@ -106,7 +106,7 @@ def election_busy_before(token, msg, opened_round, joined, wants, candidate, idl
 @njit(cache=True)
 def election_busy_after(token, msg, opened_round, handled, rounds, wait_rounds, hosting,
                         active, transit, result, winner):  # noqa: ANN001, ANN201  # fmt: skip
-    """Whether a round of :meth:`~tether.continuous.election.Election.round` decides an
+    """Whether a round of :meth:`~tether.continuous.exploration.election.Election.round` decides an
     election, delivers a result to its winner or moves a token in transit after its
     exchange (the same tests). False lets the caller skip those steps.
     """
@@ -124,8 +124,8 @@ def election_busy_after(token, msg, opened_round, handled, rounds, wait_rounds, 
 
 def warm_up() -> None:
     """Compile (or load) the round kernels on a two-robot inbox, and the control step's
-    bookkeeping kernels (:mod:`tether.continuous.bookkeep_kernels`) with them."""
-    from tether.continuous.bookkeep_kernels import warm_up as bookkeep
+    bookkeeping kernels (:mod:`tether.continuous.connectivity.bookkeep_kernels`) with them."""
+    from tether.continuous.connectivity.bookkeep_kernels import warm_up as bookkeep
 
     recv = np.array([0, 1], dtype=np.int64)
     vals = np.zeros((2, 8))

@@ -38,7 +38,7 @@ class EfficiencyConsensus:
             self.estimate[prime] = efficiency
         inbox = self.layer.exchange(pairs, self.estimate[:, None])
         if jit.enabled():  # the same update, compiled
-            from tether.continuous.round_kernels import consensus_kernel
+            from tether.continuous.exploration.round_kernels import consensus_kernel
 
             new = consensus_kernel(self.estimate, inbox.receiver, inbox.values[:, 0],
                                    inbox.valid, self.gain_per_s * dt_s)  # fmt: skip

@@ -1,4 +1,4 @@
-"""Compiled kernel of :meth:`tether.continuous.tracking.PathSet.states` (numba, lazy).
+"""Compiled kernel of :meth:`tether.continuous.exploration.tracking.PathSet.states` (numba, lazy).
 
 Closest points of robots on their sampled paths, path by path, with the arithmetic of
 the numpy version (same bits; ``tests/test_kernels.py``).
@@ -59,7 +59,8 @@ def path_states_kernel(  # noqa: ANN201, PLR0913
     q, first, pa, dseg, inv_len2, sa, ds, ta, dta, ka, dka, lengths, speed, tie, order,
     chord_start, chord_end, hint,
 ):  # noqa: ANN001  # fmt: skip
-    """Closest points of :meth:`tether.continuous.tracking.PathSet.states`, path by path.
+    """Closest points of :meth:`tether.continuous.exploration.tracking.PathSet.states`,
+    path by path.
 
     For robot ``r`` the segments ``first[r]:first[r + 1]`` of its path: the least
     distance, then among the segments within ``tie`` of it the largest arc length
@@ -139,10 +140,10 @@ def traveling_kernel(  # noqa: ANN201, PLR0913
     q, v, f_lambda, trav, secondary, lambda_hat, held, targets, path, v_cruise, tie, order,
     kp, kv, mass, damping, max_force, sigma, rz, kz, anchor_max,
 ):  # noqa: ANN001  # fmt: skip
-    """``f_i`` of Algorithm 2 as :func:`tether.continuous.multi_target.traveling_forces`.
+    """``f_i`` of Algorithm 2 as :func:`tether.continuous.exploration.motion.traveling_forces`.
 
     ``trav``: the robots with a path (``path`` is their
-    :meth:`~tether.continuous.tracking.PathSet.kernel_args`), ``secondary`` which of
+    :meth:`~tether.continuous.exploration.tracking.PathSet.kernel_args`), ``secondary`` which of
     them are secondaries; ``held``: the anchored robots and ``targets`` their targets.
     Eq. (3) saturated, ``rho(Theta(f_lambda, f_travel), Lambda_hat, sigma)`` for the
     secondaries and ``f_anchor`` (eq. (7), saturated at ``anchor_max``), each in the numpy

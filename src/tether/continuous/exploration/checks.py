@@ -14,8 +14,8 @@ import numpy as np
 from pydantic import ValidationError
 
 from tether.config import format_validation_error
-from tether.continuous.multi_target_params import TargetsConfig
-from tether.continuous.targets import TargetBook
+from tether.continuous.exploration.params import TargetsConfig
+from tether.continuous.exploration.targets import TargetBook
 from tether.errors import ScenarioError
 from tether.limits import format_bytes, memory_budget_bytes
 from tether.paths.astar import PLANNING_BYTES_PER_CELL, planning_shape

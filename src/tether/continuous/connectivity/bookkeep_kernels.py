@@ -1,8 +1,8 @@
 """Compiled per-step bookkeeping of the continuous strategies (numba, lazy).
 
 The fast paths of the running records that
-:meth:`tether.continuous.multi_target.MultiTargetStrategy._bookkeep` and
-:meth:`tether.continuous.strategy.ConnectivityStrategy._observe` keep every control
+:meth:`tether.continuous.exploration.strategy.MultiTargetStrategy._bookkeep` and
+:meth:`tether.continuous.connectivity.strategy.ConnectivityStrategy._observe` keep every control
 step, used when :func:`tether.jit.enabled`. ``numpy.linalg.norm(x, axis=-1)`` sums a
 short row's squares in coordinate order, which the loops below repeat; ``sqrt`` is
 monotone and correctly rounded, so the largest (smallest) of the norms is the ``sqrt``

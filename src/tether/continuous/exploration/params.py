@@ -9,9 +9,13 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from tether.continuous.params import TRAVEL_TABLE2
-from tether.continuous.strategy_params import MAX_DELAY_ROUNDS, MAX_ROUNDS, ContinuousParams
-from tether.continuous.targets import height_range
+from tether.continuous.connectivity.params import TRAVEL_TABLE2
+from tether.continuous.connectivity.strategy_params import (
+    MAX_DELAY_ROUNDS,
+    MAX_ROUNDS,
+    ContinuousParams,
+)
+from tether.continuous.exploration.targets import height_range
 
 
 class _Strict(BaseModel):
