@@ -53,13 +53,9 @@ def machine() -> dict:
 def prepare() -> None:
     """Fill numba's cache before anything is timed (a no-op when it is warm already), so
     that no row's child process compiles; ``kernels_compile`` times compilation apart."""
-    print(
-        "filling numba's cache (python -m tether.continuous.connectivity.kernels) ...", flush=True
-    )
+    print("filling numba's cache (python -m tether.kernel_cache) ...", flush=True)
     env = dict(os.environ, TETHER_JIT="1")
-    subprocess.run(
-        [sys.executable, "-m", "tether.continuous.connectivity.kernels"], env=env, check=True
-    )
+    subprocess.run([sys.executable, "-m", "tether.kernel_cache"], env=env, check=True)
 
 
 def parse(argv: list[str] | None) -> argparse.Namespace:

@@ -52,7 +52,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
         "strategies",
         ("tether.silent", "tether.continuous", "tether.recurrent", "tether.mission"),
     ),
-    ("running", ("tether.runner", "tether.plugins", "tether.scenario_world")),
+    (
+        "running",
+        ("tether.runner", "tether.plugins", "tether.scenario_world", "tether.kernel_cache"),
+    ),
     (
         "experiments",
         ("tether.experiments", "tether.recurrent.report", "tether.mission.report"),

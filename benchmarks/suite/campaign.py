@@ -1,7 +1,7 @@
 """What a run and a campaign cost: start-up, compilation, trials, sweeps, placement.
 
-* ``kernels_compile``: ``python -m tether.continuous.connectivity.kernels`` with an empty
-  numba cache (a temporary ``NUMBA_CACHE_DIR``): what the first run on a new install pays once.
+* ``kernels_compile``: ``python -m tether.kernel_cache`` with an empty numba cache
+  (a temporary ``NUMBA_CACHE_DIR``): what the first run on a new install pays once.
 * ``run_startup``: ``tether run silent_demo --no-figures`` (12 robots, 239 steps), the
   whole process as a user runs it; the first of four runs apart (file cache).
 * ``multi_target_trial``: the 35-robot town trial of ``multi_target`` in this process,
@@ -35,7 +35,7 @@ def kernels_compile(quick: bool) -> dict:
     import sys
 
     with tempfile.TemporaryDirectory() as cache:
-        wall, cpu = command([sys.executable, "-m", "tether.continuous.connectivity.kernels"],
+        wall, cpu = command([sys.executable, "-m", "tether.kernel_cache"],
                             env={"NUMBA_CACHE_DIR": cache, "TETHER_JIT": "1"})  # fmt: skip
     line = Line("compile every kernel (empty cache, once per install)", "s", cpu,
                 extra={"wall_s": wall})  # fmt: skip

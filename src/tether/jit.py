@@ -13,10 +13,10 @@ the time. :func:`enabled` decides, from ``TETHER_JIT``:
   Starting numba costs about a second, so a short run never pays it; a long run
   switches after two seconds. When numba's cache does not hold the kernels yet, this
   process compiles them then, once, with a line on stderr saying so (a child process,
-  ``python -m tether.continuous.connectivity.kernels``, that the command waits for and
-  that dies with it: nothing keeps running after tether exits), and later runs load them
-  from the cache. ``python -m tether.continuous.connectivity.kernels`` compiles them ahead
-  of time. While another process compiles, this one keeps the reference paths.
+  ``python -m tether.kernel_cache``, that the command waits for and that dies with
+  it: nothing keeps running after tether exits), and later runs load them from the
+  cache. ``python -m tether.kernel_cache`` compiles them ahead of time. While
+  another process compiles, this one keeps the reference paths.
 
 Paths every strategy shares (line of sight of the sensing graph, team metrics) use
 their kernel only when numba is already loaded (:func:`warm`), so ``silent`` and
@@ -68,8 +68,8 @@ KERNEL_MODULES = (
 )
 
 #: the child process that compiles every kernel into numba's cache (the marker's path is
-#: appended; the kernels module's warm-up writes the marker itself and ignores it)
-COMPILE_COMMAND = [sys.executable, "-m", "tether.continuous.connectivity.kernels"]
+#: appended; tether.kernel_cache's warm-up writes the marker itself and ignores it)
+COMPILE_COMMAND = [sys.executable, "-m", "tether.kernel_cache"]
 
 _forced: bool | None = None
 _mode: str | None = None
@@ -240,7 +240,7 @@ def _alive(pid: int) -> bool:
 def compile_kernels(path: Path | None = None) -> bool:
     """Compile every kernel into numba's cache in a child process, waiting for it.
 
-    The child (``python -m tether.continuous.connectivity.kernels``) is killed if this process stops
+    The child (``python -m tether.kernel_cache``) is killed if this process stops
     waiting (an exception, Ctrl-C) and by the kernel if this process dies
     (:func:`tether.lifetime.kill_on_parent_death`). A line on stderr says what happens.
     Returns True when the kernels are compiled.

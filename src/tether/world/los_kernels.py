@@ -72,3 +72,13 @@ def segment_free_kernel(free, shape, a, b, step_cells, field, to_cells):  # noqa
             k += 1
         out[s] = ok
     return out
+
+
+def warm_up() -> None:
+    """Compile (or load) :func:`segment_free_kernel` on 2-D and 3-D grids, with and without
+    a clearance field."""
+    for mask in (np.ones((4, 4), dtype=bool), np.ones((4, 4, 4), dtype=bool)):
+        shape = np.asarray(mask.shape, dtype=np.int64)
+        a = np.full((1, mask.ndim), 0.5)
+        for field in (np.zeros(0), np.ones(mask.size)):
+            segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5, field, 1.0)

@@ -26,13 +26,12 @@ of 35 robots the numpy versions are almost all interpreter and dispatch overhead
 from __future__ import annotations
 
 import math
-import time
 from functools import cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
-from tether import jit
 from tether.continuous.connectivity.force_kernels import exact_force_kernel
 from tether.continuous.connectivity.pair_kernels import (
     any_row_beyond,
@@ -48,6 +47,9 @@ from tether.graph.lapack_kernels import syevr_second_kernel
 from tether.graph.small import OK
 from tether.graph.small_kernels import small_fiedler_kernel
 from tether.world.clearance_cache_kernels import segments_nearest_cached
+
+if TYPE_CHECKING:
+    from tether.world.clearance import ObstacleIndex
 
 
 @njit(cache=True)
@@ -333,58 +335,50 @@ def _eigen_and_force(out, guess, lapack, small, lwork, liwork, potential, with_f
     return out, eigen, force
 
 
-def warm_up() -> float:
-    """Compile or load (from numba's cache) every kernel of the continuous strategies.
+def tiny_team() -> tuple[np.ndarray, np.ndarray, ObstacleIndex, tuple, np.ndarray]:
+    """The warm-ups' input: three robots in 3-D near one obstacle point.
 
-    Each kernel is called once on a tiny input of the types the strategies pass, so
-    that a benchmark (or a worker of a campaign) can pay numba's start-up up front and
-    measure it on its own; then the marker of :func:`tether.jit.marker` is written (the
-    ``auto`` switch waits for it). Returns the seconds it took.
+    Returns ``q``, its pairs within 6 m, the :class:`tether.world.clearance.ObstacleIndex`
+    of the obstacle points, :func:`weights_kernel`'s output for the pairs (Table 2's
+    outdoor radii) and a Fiedler vector ``nu``.
     """
-    start = time.perf_counter()
-    from tether.graph.kernels import laplacian_dense_kernel
     from tether.world.clearance import ObstacleIndex
-    from tether.world.los_kernels import segment_free_kernel
 
     q = np.array([[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [1.0, 1.5, 1.0]])
     pairs = pairs_in_range(q, 6.0)
-    pairs_below(q, pairs, 6.0)
     index = ObstacleIndex(np.array([[1.0, 0.5, 1.0], [5.0, 5.0, 5.0]]), 3)
     i, j = pairs[:, 0], pairs[:, 1]
     clear, s, o = index.segment_clearance_kernel(q[i], q[j], 1.75, i * 3 + j)
-    index.segment_clearance_kernel(q[i], q[j], 1.75)
+    out = weights_kernel(q, pairs, True, clear, s, o, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
+    return q, pairs, index, out, np.array([-0.5, 0.0, 0.5])
+
+
+def warm_up() -> None:
+    """Compile (or load) every kernel of a sub-step's App. A chain on :func:`tiny_team`.
+
+    The pair search, the obstacle clearance, the weights, the eigenpair and the force,
+    each called once with the types the ``connectivity`` strategy passes
+    (:mod:`tether.kernel_cache` calls it with every other package's warm-up).
+    """
+    from tether.continuous.connectivity.force_kernels import warm_up as force_warm_up
+    from tether.graph.lapack_kernels import warm_up as lapack_warm_up
     from tether.world.clearance_kernels import field_below_kernel
 
+    q, pairs, index, out, nu = tiny_team()
+    pairs_below(q, pairs, 6.0)
+    i, j = pairs[:, 0], pairs[:, 1]
+    index.segment_clearance_kernel(q[i], q[j], 1.75)
     ones = np.ones(3, dtype=np.int64)
     field_below_kernel(q, np.zeros(1), ones, ones, np.zeros(3), 1.0, 0.5, 1.0)
-    out = weights_kernel(q, pairs, True, clear, s, o, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
-    pf, dP_di, dP_dj, _, coll, cp, cu, cl = out
-    nu = np.array([-0.5, 0.0, 0.5])
-    from tether.continuous.connectivity.force_kernels import warm_up as force_warm_up
-
     force_warm_up(q, pairs, out, nu)
-    laplacian_dense_kernel(3, pairs, pf)
+    laplacian_dense_kernel(3, pairs, out[0])
     rows = np.array([0, 2], dtype=np.int64)
     any_row_beyond(q, rows, q[rows], 1.0)
-    first = np.array([0, 1], dtype=np.int64)
-    seg = np.ones((1, 3))
-    one = np.ones(1)
-    from tether.continuous.exploration.tracking_kernels import path_states_kernel
-
-    path_states_kernel(q[:1].copy(), first, seg, seg, one, one, one, seg, seg, seg, seg, one,
-                       one, 1e-6, 1, one.copy(), one.copy() + 1, np.full(1, -1))  # fmt: skip
-    for mask in (np.ones((4, 4), dtype=bool), np.ones((4, 4, 4), dtype=bool)):
-        shape = np.asarray(mask.shape, dtype=np.int64)
-        a = np.full((1, mask.ndim), 0.5)
-        for field in (np.zeros(0), np.ones(mask.size)):
-            segment_free_kernel(mask.reshape(-1), shape, a, a + 1.0, 0.5, field, 1.0)
     for obs in (None, index):
         points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
             obs.kernel_state(3)  # fmt: skip
         evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
                         table, used, 0.25, fld, 1)  # fmt: skip
-    from tether.graph.lapack_kernels import warm_up as lapack_warm_up
-
     lapack_warm_up()
     for obs in (None, index):
         points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
@@ -397,37 +391,4 @@ def warm_up() -> float:
                 radii = (2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
                 evaluate_fiedler_free_kernel(q, *radii, nu, lapack, small.SETTINGS, 78, 30,
                                              (0.0, 0.5, 1.0), True)  # fmt: skip
-    # every other kernel module's warm-up (imports here: numba only once asked for)
-    from tether.comm_kernels import warm_up as comm
-    from tether.continuous.connectivity.dynamics_kernels import warm_up as dynamics
-    from tether.continuous.exploration.round_kernels import warm_up as rounds
-    from tether.graph.grid_kernels import warm_up as grid
-    from tether.graph.link_kernels import warm_up as links
-    from tether.graph.metrics_kernels import warm_up as metrics
-    from tether.paths.astar_kernels import warm_up as astar
-    from tether.paths.geodesic_kernels import warm_up as geodesic
-    from tether.recurrent.planning.apx_kernels import warm_up as apx
-    from tether.recurrent.planning.expgraph_kernels import warm_up as expgraph
-    from tether.recurrent.planning.ilp_kernels import warm_up as ilp
-    from tether.recurrent.planning.steiner_kernels import warm_up as steiner
-    from tether.sensing.depth_kernels import warm_up as depth
-    from tether.sensing.draws_kernels import warm_up as draws
-    from tether.sensing.robots_kernels import warm_up as sensing
-    from tether.silent.steering_kernels import warm_up as steering
-
-    for module_warm_up in (dynamics, rounds, comm, steiner, ilp, steering, sensing, draws, grid,
-                           metrics, astar, links, geodesic, expgraph, depth, apx):  # fmt: skip
-        module_warm_up()
     small_fiedler_kernel(np.array([[1.0, -1.0], [-1.0, 1.0]]), nu[:2].copy(), *small.SETTINGS)
-    seconds = time.perf_counter() - start
-    jit.write_marker(seconds)
-    return seconds
-
-
-if __name__ == "__main__":  # the background warm-up of tether.jit's ``auto`` switch
-    import contextlib
-    import os
-
-    with contextlib.suppress(AttributeError, OSError):
-        os.nice(10)
-    warm_up()

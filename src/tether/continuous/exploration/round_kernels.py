@@ -123,10 +123,7 @@ def election_busy_after(token, msg, opened_round, handled, rounds, wait_rounds, 
 
 
 def warm_up() -> None:
-    """Compile (or load) the round kernels on a two-robot inbox, and the control step's
-    bookkeeping kernels (:mod:`tether.continuous.connectivity.bookkeep_kernels`) with them."""
-    from tether.continuous.connectivity.bookkeep_kernels import warm_up as bookkeep
-
+    """Compile (or load) the round kernels on a two-robot inbox."""
     recv = np.array([0, 1], dtype=np.int64)
     vals = np.zeros((2, 8))
     valid = np.ones(2, dtype=np.bool_)
@@ -137,4 +134,3 @@ def warm_up() -> None:
     flags = np.zeros(2, dtype=np.bool_)
     election_busy_before(token, vals, opened, count, flags, flags, 1, 2, 0, 0, 4)
     election_busy_after(token, vals, opened, count, 1, 2, 3, 2, 4, 4, 5)
-    bookkeep()

@@ -203,3 +203,13 @@ def traveling_kernel(  # noqa: ANN201, PLR0913
         for c in range(dim):
             f[i, c] = -mag * ((q[i, c] - targets[k, c]) / den)
     return f
+
+
+def warm_up() -> None:
+    """Compile (or load) :func:`path_states_kernel` on one robot and a one-segment path."""
+    q = np.array([[0.0, 0.0, 1.0]])
+    first = np.array([0, 1], dtype=np.int64)
+    seg = np.ones((1, 3))
+    one = np.ones(1)
+    path_states_kernel(q, first, seg, seg, one, one, one, seg, seg, seg, seg, one, one, 1e-6, 1,
+                       one.copy(), one.copy() + 1, np.full(1, -1))  # fmt: skip
