@@ -17,7 +17,7 @@ import pytest
 pytest.importorskip("numba")
 
 from tether import jit  # noqa: E402
-from tether.continuous.connectivity.pair_kernels import any_row_beyond  # noqa: E402
+from tether.continuous.exploration.step_kernels import any_row_beyond  # noqa: E402
 from tether.continuous.exploration.strategy import _anchor_leaves  # noqa: E402
 
 

@@ -74,6 +74,14 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ),
 ]
 
+#: (a, b): sub-packages of one strategy package where ``a`` never imports ``b`` (the
+#: exploration of the continuous paper builds on its force, never the other way round;
+#: the planners of the recurrent paper import nothing from its simulator)
+NEVER_IMPORTS: list[tuple[str, str]] = [
+    ("tether.continuous.connectivity", "tether.continuous.exploration"),
+    ("tether.recurrent.planning", "tether.recurrent.exploration"),
+]
+
 
 def module_name(path: Path) -> str:
     parts = list(path.relative_to(SRC).with_suffix("").parts)
@@ -148,6 +156,20 @@ def test_layers_import_only_downward() -> None:
         if layer_of(b) > layer_of(a)
     ]
     assert upward == []
+
+
+def _inside(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
+
+
+@pytest.mark.parametrize(("lower", "upper"), NEVER_IMPORTS)
+def test_a_sub_package_never_imports_the_one_built_on_it(lower: str, upper: str) -> None:
+    g = import_graph()
+    assert any(_inside(m, lower) for m in g) and any(_inside(m, upper) for m in g)
+    wrong = sorted(
+        f"{a} imports {b}" for a, b in g.edges if _inside(a, lower) and _inside(b, upper)
+    )
+    assert wrong == []
 
 
 def test_no_source_file_over_500_lines() -> None:

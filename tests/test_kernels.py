@@ -171,7 +171,7 @@ def test_subset_solver_is_scipys_eigh() -> None:
 
 
 def test_fused_substep_force_is_the_chain() -> None:
-    """One compiled call per sub-step (force_kernels.total_force_kernel) = the reference chain."""
+    """One compiled call per sub-step (substep_kernels.total_force_kernel) = the reference chain."""
     from tether.config import load_scenario
     from tether.continuous.connectivity.dynamics import displacement_step
     from tether.continuous.exploration.motion import travel_args, travel_gains, traveling_forces

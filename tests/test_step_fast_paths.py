@@ -17,12 +17,10 @@ import pytest
 
 from tether import floats, jit
 from tether.comm import CommParams, MessageLayer
-from tether.continuous.connectivity.bookkeep_kernels import (
-    min_link_distance_kernel,
-    travel_stretch_kernel,
-)
+from tether.continuous.connectivity.bookkeep_kernels import min_link_distance_kernel
 from tether.continuous.connectivity.pair_kernels import row_norm
 from tether.continuous.exploration.election import Election
+from tether.continuous.exploration.step_kernels import travel_stretch_kernel
 from tether.continuous.exploration.tracking import PathSet, TrackedPath
 from tether.paths.bspline import SplinePath
 

@@ -40,6 +40,8 @@ from pathlib import Path
 KERNEL_MODULES = (
     "continuous/connectivity/kernels.py",
     "continuous/exploration/tracking_kernels.py",
+    "continuous/exploration/substep_kernels.py",
+    "continuous/exploration/step_kernels.py",
     "continuous/connectivity/force_kernels.py",
     "continuous/connectivity/dynamics_kernels.py",
     "continuous/connectivity/pair_kernels.py",

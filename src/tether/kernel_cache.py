@@ -27,6 +27,8 @@ def warm_up() -> float:
     from tether.continuous.connectivity.dynamics_kernels import warm_up as dynamics
     from tether.continuous.connectivity.kernels import warm_up as connectivity
     from tether.continuous.exploration.round_kernels import warm_up as rounds
+    from tether.continuous.exploration.step_kernels import warm_up as steps
+    from tether.continuous.exploration.substep_kernels import warm_up as substep
     from tether.continuous.exploration.tracking_kernels import warm_up as tracking
     from tether.graph.grid_kernels import warm_up as grid
     from tether.graph.link_kernels import warm_up as links
@@ -43,9 +45,9 @@ def warm_up() -> float:
     from tether.silent.steering_kernels import warm_up as steering
     from tether.world.los_kernels import warm_up as line_of_sight
 
-    for module_warm_up in (connectivity, tracking, line_of_sight, dynamics, rounds, bookkeep,
-                           comm, steiner, ilp, steering, sensing, draws, grid, metrics, astar,
-                           links, geodesic, expgraph, depth, apx):  # fmt: skip
+    for module_warm_up in (connectivity, substep, tracking, steps, line_of_sight, dynamics,
+                           rounds, bookkeep, comm, steiner, ilp, steering, sensing, draws, grid,
+                           metrics, astar, links, geodesic, expgraph, depth, apx):  # fmt: skip
         module_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)

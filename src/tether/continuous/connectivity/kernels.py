@@ -1,7 +1,6 @@
 """Compiled kernels of App. A: pairs, clearance, weights, Laplacian (numba, lazy).
 
-(Closest points on paths: :mod:`tether.continuous.exploration.tracking_kernels`; forces
-and motion of a sub-step: :mod:`tether.continuous.connectivity.force_kernels`; the pair
+(The force of a sub-step: :mod:`tether.continuous.connectivity.force_kernels`; the pair
 search: :mod:`tether.continuous.connectivity.pair_kernels`.)
 
 :func:`evaluate_fiedler_kernel` is one sub-step's evaluation in one call: the weights,
@@ -33,12 +32,7 @@ import numpy as np
 from numba import njit
 
 from tether.continuous.connectivity.force_kernels import exact_force_kernel
-from tether.continuous.connectivity.pair_kernels import (
-    any_row_beyond,
-    pairs_below,
-    pairs_in_range,
-    row_norm,
-)
+from tether.continuous.connectivity.pair_kernels import pairs_below, pairs_in_range, row_norm
 from tether.continuous.connectivity.potential_kernels import log_derivative1, smooth_step1
 from tether.graph import small
 from tether.graph.fiedler import _TINY_REL
@@ -372,8 +366,6 @@ def warm_up() -> None:
     field_below_kernel(q, np.zeros(1), ones, ones, np.zeros(3), 1.0, 0.5, 1.0)
     force_warm_up(q, pairs, out, nu)
     laplacian_dense_kernel(3, pairs, out[0])
-    rows = np.array([0, 2], dtype=np.int64)
-    any_row_beyond(q, rows, q[rows], 1.0)
     for obs in (None, index):
         points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
             obs.kernel_state(3)  # fmt: skip

@@ -5,7 +5,6 @@
 The same pairs, in lexicographic order, as the numpy reference
 (:func:`tether.graph.structure.pairs_within` followed by the distance test of
 :func:`tether.continuous.connectivity.weights.compute_weights`): ``tests/test_pairs_in_range.py``.
-:func:`any_row_beyond` is the anchors' distance test of the ``multi_target`` strategy.
 """
 
 from __future__ import annotations
@@ -199,21 +198,3 @@ def pairs_below(q, pairs, r):  # noqa: ANN001, ANN201
             diff[d] = q[pairs[k, 0], d] - q[pairs[k, 1], d]
         keep[k] = row_norm(diff) < r
     return pairs[keep].copy()
-
-
-@njit(cache=True)
-def any_row_beyond(q, rows, targets, r):  # noqa: ANN001, ANN201
-    """``numpy.any(numpy.linalg.norm(q[rows] - targets, axis=1) >= r)``, the same
-    distances (:func:`row_norm`) without numpy's per-call overhead.
-
-    The anchor test of :meth:`tether.continuous.exploration.strategy.MultiTargetStrategy.evaluate`
-    (an anchor must stay within ``Rz`` of its target, Nestmeyer et al. 2017, Sec. 4).
-    """
-    dim = q.shape[1]
-    diff = np.empty(dim)
-    for k in range(len(rows)):
-        for d in range(dim):
-            diff[d] = q[rows[k], d] - targets[k, d]
-        if row_norm(diff) >= r:
-            return True
-    return False

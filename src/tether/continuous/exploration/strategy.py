@@ -61,14 +61,13 @@ from tether.world.world import World
 
 @cache
 def _kernels() -> SimpleNamespace:
-    """:mod:`tether.continuous.connectivity.pair_kernels` and
-    :mod:`~tether.continuous.connectivity.bookkeep_kernels`, imported on first use (they
-    load numba; an import statement per call costs microseconds)."""
-    from tether.continuous.connectivity import bookkeep_kernels, pair_kernels
+    """:mod:`tether.continuous.exploration.step_kernels`, imported on first use (it loads
+    numba; an import statement per call costs microseconds)."""
+    from tether.continuous.exploration import step_kernels
 
     return SimpleNamespace(
-        any_row_beyond=pair_kernels.any_row_beyond,
-        travel_stretch_kernel=bookkeep_kernels.travel_stretch_kernel,
+        any_row_beyond=step_kernels.any_row_beyond,
+        travel_stretch_kernel=step_kernels.travel_stretch_kernel,
     )
 
 
@@ -76,7 +75,7 @@ def _anchor_leaves(q: np.ndarray, held: np.ndarray, targets: np.ndarray, rz_m: f
     """True if an anchored robot ``held[k]`` is ``Rz`` or farther from ``targets[k]``.
 
     ``q`` is ``(n, dim)``, ``targets`` ``(len(held), dim)``. With the kernels, one
-    compiled call (:func:`tether.continuous.connectivity.pair_kernels.any_row_beyond`, the same
+    compiled call (:func:`tether.continuous.exploration.step_kernels.any_row_beyond`, the same
     distances as ``numpy.linalg.norm``); the numpy test otherwise (the reference).
     """
     if jit.enabled():

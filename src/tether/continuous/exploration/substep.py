@@ -7,7 +7,7 @@
 the traveling force of Algorithm 2 as
 :func:`tether.continuous.exploration.motion.traveling_forces` does, their sum and the
 displacement rule's step, in one call of
-:func:`~tether.continuous.connectivity.force_kernels.total_force_kernel` (the same kernels
+:func:`~tether.continuous.exploration.substep_kernels.total_force_kernel` (the same kernels
 in the same order, so the same bits). Used when :func:`tether.jit.enabled` and the exact
 eigensolver runs; the reference is the chain itself.
 """
@@ -53,7 +53,7 @@ def fused_total_force(
         Without it the fused call would leave the change out.
     """
     from tether.continuous.connectivity.dynamics_kernels import displacement_kernel
-    from tether.continuous.connectivity.force_kernels import total_force_kernel
+    from tether.continuous.exploration.substep_kernels import total_force_kernel
 
     conn, integ = strategy.conn, strategy.integ
     potential = (float(conn.lambda2_min), float(conn.lambda2_null), float(conn.potential_gain))
