@@ -2,7 +2,7 @@
 
 :func:`tether.recurrent.planning.apx_bands.bands` makes the subsets of at most ``delta``
 frontiers band by band of utility so that Algorithm 1 (Banfi et al., Sec. V) can stop
-early; the band widths are a matter of speed only (issue 14), so the bands joined must
+early; the band widths are a matter of speed only, so the bands joined must
 be exactly the global order: decreasing utility, increasing size, increasing colex rank.
 """
 

@@ -1,4 +1,4 @@
-"""Pairs within range through the cell grid (issue 14) against the k-d tree, exactly.
+"""Pairs within range through the cell grid against the k-d tree, exactly.
 
 :mod:`tether.graph.grid_kernels` must return :func:`tether.graph.pairs_within`'s pairs
 (same set, same lexicographic order): random teams in 2-D and 3-D, lattices whose

@@ -1,7 +1,7 @@
 """The compiled max-flow of the ILP's cut separation finds the reference's cuts exactly.
 
 :mod:`tether.recurrent.planning.ilp_kernels` against scipy's ``maximum_flow`` in
-:meth:`DirectedCutModel._min_cut` (issue 14): same flow value and the same two cuts
+:meth:`DirectedCutModel._min_cut`: same flow value and the same two cuts
 (both are unique for every maximum flow) on LP-like capacities of exploration graphs.
 """
 

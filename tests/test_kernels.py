@@ -1,6 +1,6 @@
 """Compiled kernels (tether.jit) against their reference paths: the same bits.
 
-Every fast path of issue 14 keeps its numpy reference; here both run on the same
+Every fast path keeps its numpy reference; here both run on the same
 inputs and must agree exactly (the arithmetic is the same, in the same order), and the
 clearance search also against brute force.
 """
@@ -347,7 +347,7 @@ def test_whole_runs_are_the_same_with_and_without_kernels(name: str, robots: int
 
 @pytest.mark.parametrize("on", [False, True])
 def test_weights_with_an_empty_obstacle_index_are_free_space(on: bool) -> None:
-    """An index without points gives the free-space weights (issue 14: one evaluation)."""
+    """An index without points gives the free-space weights (one evaluation)."""
     rng = np.random.default_rng(5)
     q = rng.uniform(0.0, 12.0, (30, 3))
     empty = ObstacleIndex.from_world(World(dim=3))

@@ -1,4 +1,4 @@
-"""The per-step team metrics in one compiled call (issue 14) against the reference.
+"""The per-step team metrics in one compiled call against the reference.
 
 :func:`tether.sim.team_metrics` with numba loaded and a small team takes components,
 lambda2, the shortest link and the close pairs from

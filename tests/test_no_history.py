@@ -52,14 +52,14 @@ _ANY = re.compile("|".join(f"(?:{rx})" for rx in HISTORY.values()), re.IGNORECAS
 SUFFIXES = {".md", ".py", ".yaml", ".yml", ".toml", ".js", ".html", ".css", ".txt", ".json"}
 #: a tool that times the Fig. 9 trials under two checkouts of the user's choice: its
 #: flags name them old and new (``--old-root``), which is what it does, not history
-NOT_SEARCHED = {"benchmarks/bench_fig9_trials.py"}
+NOT_SEARCHED = {"benchmarks/bench_fig9_trials.py", "tests/test_no_history.py"}
 #: names of files outside the searched ones that a page may still cite
 CITED_AS_NAMED: tuple[str, ...] = ()
 
 
 def searched_files() -> list[Path]:
     files = [ROOT / "README.md", ROOT / "mkdocs.yml"]
-    for folder in ("docs", "src/tether", "examples", "benchmarks"):
+    for folder in ("docs", "src/tether", "examples", "benchmarks", "tests"):
         for path in sorted((ROOT / folder).rglob("*")):
             rel = path.relative_to(ROOT).as_posix()
             if (

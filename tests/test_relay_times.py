@@ -1,10 +1,10 @@
 """Travel times behind the relay paths ``P_f`` (Sec. VI) match the simulated motion.
 
-Regression for the divergence of the theta = 1 / 3 report runs (docs/explanation/recurrent.md):
-after commit c892e38 (``wait_until = t + 1 + delay``), ``_bind`` still read
-``wait_until - t`` as the steps a robot stands still, so every robot assigned by
-the current plan got one step more than the robots already under way; this
-reordered the travel times, changed ``P_f`` and with it readiness.
+With ``wait_until = t + 1 + delay``, ``_bind`` must read ``wait_until - t - 1`` as the
+steps a robot stands still: reading ``wait_until - t`` gives every robot assigned by
+the current plan one step more than the robots already under way, which reorders the
+travel times, changes ``P_f`` and with it readiness (the theta = 1 / 3 report runs of
+docs/explanation/recurrent.md).
 """
 
 from __future__ import annotations
@@ -88,13 +88,13 @@ def test_bound_travel_times_are_the_simulated_arrival_steps(
     assert fresh_checked > 0  # robots assigned by the plan itself were checked
 
 
-def test_offices_seed3_theta3_plans_as_before_c892e38() -> None:
-    """The captured divergence: report run ``offices/theta3/run3`` (seed 3).
+def test_offices_seed3_theta3_plans_at_the_recorded_steps() -> None:
+    """A recorded case: report run ``offices/theta3/run3`` (seed 3).
 
-    Old code and the fixed code plan at steps 1, 2, 3, 12 with 12, 6, 3, 4 ready
-    robots; with the extra step the P_f of the step-2 plan bound robot 5 through
-    robot 10 instead of robots 0 and 1, and only 3 robots were ready at step 12
-    (utility 12.02 instead of 16.84).
+    The team plans at steps 1, 2, 3, 12 with 12, 6, 3, 4 ready robots; with an extra
+    step the P_f of the step-2 plan would bind robot 5 through robot 10 instead of
+    robots 0 and 1, and only 3 robots would be ready at step 12 (utility 12.02
+    instead of 16.84).
     """
     path = MAPS / "offices.png"
     if not path.exists():

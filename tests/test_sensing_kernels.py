@@ -1,4 +1,4 @@
-"""The compiled sensing (issue 14) against the numpy reference, bit for bit.
+"""The compiled sensing against the numpy reference, bit for bit.
 
 :mod:`tether.sensing.robots_kernels` repeats the reference's arithmetic term for term
 and takes its random numbers from the same ``Generator`` draws in the same order, so

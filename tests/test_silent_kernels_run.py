@@ -1,4 +1,4 @@
-"""A whole ``silent_demo`` run with the compiled kernels on and off (issue 14).
+"""A whole ``silent_demo`` run with the compiled kernels on and off.
 
 Sensing (occlusion, noise), the desired steps and the metrics are bit-identical
 between the kernels and the numpy reference; the constrained steps agree to rounding

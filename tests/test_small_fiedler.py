@@ -239,8 +239,8 @@ def test_strategy_parameter_selects_the_solver(method: str, monkeypatch) -> None
 
 
 def test_multi_target_defaults_to_the_small_solver_as_connectivity_does() -> None:
-    """The Fig. 9 campaign in the docs (seventh session) ran with the certified small
-    solver; ``fiedler_method: lapack`` stays available (the earlier campaigns)."""
+    """The Fig. 9 campaign in the docs runs with the certified small solver;
+    ``fiedler_method: lapack`` (``dsyevr`` at every sub-step) stays available."""
     from tether.continuous.connectivity.strategy import ConnectivityStrategyParams
     from tether.continuous.exploration.params import MultiTargetParams
 

@@ -1,4 +1,4 @@
-"""The compiled constrained steps (issue 14) against the numpy reference.
+"""The compiled constrained steps against the numpy reference.
 
 Both evaluate constraints (1)-(2) of Kerestecioglu and Cezayirli (Sec. IV) with the same
 arithmetic; only ``arccos``/``cos`` come from different libraries, so the steps agree to

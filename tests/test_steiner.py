@@ -1,7 +1,7 @@
 """Dreyfus-Wagner Steiner trees against brute force on small random graphs.
 
 Every test runs with the reference (numpy) path and, if numba is installed, with the
-compiled kernel of :mod:`tether.recurrent.planning.steiner_kernels` (issue 14); the
+compiled kernel of :mod:`tether.recurrent.planning.steiner_kernels`; the
 last test checks that both give the same optimum on larger graphs.
 """
 

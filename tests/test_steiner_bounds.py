@@ -1,4 +1,4 @@
-"""The pruning bounds of the compiled exact Steiner tree (issue 14).
+"""The pruning bounds of the compiled exact Steiner tree.
 
 ``steiner_kernel`` drops a label ``(S, v)`` when its cost plus ``lower_bounds`` exceeds
 the best tree known, so a bound that is too high loses the optimum and one that is too low

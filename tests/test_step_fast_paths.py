@@ -1,6 +1,6 @@
 """Fast paths of the multi_target control step: the same bits as their references.
 
-Each compiled or vectorised path of the control step (issue 10) is checked against
+Each compiled or vectorised path of the control step is checked against
 the code it replaces (``TETHER_JIT`` off) and, where there is one, a brute-force
 oracle: the bookkeeping kernels, the roles' distances to targets, the one-pass
 closest-point kernel on paths full of ties, and the election's idle-phase skipping

@@ -1,4 +1,4 @@
-"""``Polyline.at``/``project`` on Python floats give numpy's results exactly (issue 14).
+"""``Polyline.at``/``project`` on Python floats give numpy's results exactly.
 
 The leader's carrot is computed every ``silent`` step; the scalar clips and norms
 replaced ``np.clip``/``np.linalg.norm`` calls. Here the previous numpy formulas are
