@@ -73,3 +73,16 @@ def test_the_marker_hashes_every_warmed_module() -> None:
 
 def test_the_compile_command_is_the_kernel_cache() -> None:
     assert jit.COMPILE_COMMAND[1:] == ["-m", "tether.kernel_cache"]
+
+
+def test_the_marker_hashes_every_compiled_module_the_switch_governs() -> None:
+    """A kernel inlines what it calls from other modules (numba's cache keys on the
+    caller's file only), so every module of cached kernels that ``TETHER_JIT`` switches
+    must change the marker; the environments compile their own kernels apart."""
+    src = Path(jit.__file__).parent
+    compiled = {
+        path.relative_to(src).as_posix()
+        for path in src.rglob("*.py")
+        if "@njit(cache=True" in path.read_text() and path.parent.name != "envs"
+    }
+    assert compiled - set(jit.KERNEL_MODULES) == set()

@@ -45,6 +45,7 @@ KERNEL_MODULES = (
     "continuous/connectivity/force_kernels.py",
     "continuous/connectivity/dynamics_kernels.py",
     "continuous/connectivity/pair_kernels.py",
+    "continuous/connectivity/potential_kernels.py",
     "graph/lapack_kernels.py",
     "continuous/exploration/round_kernels.py",
     "continuous/connectivity/bookkeep_kernels.py",
