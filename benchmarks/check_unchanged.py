@@ -30,7 +30,7 @@ import pyarrow.parquet as pq
 from tether.config import builtin_scenarios
 from tether.runner import run
 
-VOLATILE = {"wall_time_s", "provenance", "timing_s", "planning_time_mean_s",
+VOLATILE = {"wall_time_s", "cpu_time_s", "provenance", "timing_s", "planning_time_mean_s",
             "planning_time_max_s", "planning_times_s", "planning_time_total_s"}  # fmt: skip
 
 

@@ -92,13 +92,19 @@ def pairs_within_kernel(q, r):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True, inline="always")
+def sq_between(a, i, b, j):  # noqa: ANN001, ANN202
+    """``sum_d (a[i, d] - b[j, d])^2``, summed in coordinate order."""
+    acc = 0.0
+    for d in range(a.shape[1]):
+        x = a[i, d] - b[j, d]
+        acc += x * x
+    return acc
+
+
+@njit(cache=True, inline="always")
 def sq_dist(q, i, j):  # noqa: ANN001, ANN202
     """``sum_d (q_i - q_j)_d^2``, summed in coordinate order."""
-    sq = 0.0
-    for d in range(q.shape[1]):
-        x = q[i, d] - q[j, d]
-        sq += x * x
-    return sq
+    return sq_between(q, i, q, j)
 
 
 @njit(cache=True)

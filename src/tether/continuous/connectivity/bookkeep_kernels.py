@@ -3,10 +3,10 @@
 The fast path of the shortest link that
 :meth:`tether.continuous.connectivity.strategy.ConnectivityStrategy._observe` records
 every control step, used when :func:`tether.jit.enabled`. ``numpy.linalg.norm(x,
-axis=-1)`` sums a short row's squares in coordinate order, which :func:`sq_between`
-repeats; ``sqrt`` is monotone and correctly rounded, so the smallest of the norms is the
-``sqrt`` of the smallest sum: the same bits as the numpy reference
-(``tests/test_step_fast_paths.py``).
+axis=-1)`` sums a short row's squares in coordinate order, which
+:func:`tether.graph.kernels.sq_between` repeats; ``sqrt`` is monotone and correctly
+rounded, so the smallest of the norms is the ``sqrt`` of the smallest sum: the same
+bits as the numpy reference (``tests/test_step_fast_paths.py``).
 """
 
 from __future__ import annotations
@@ -16,15 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-
-@njit(cache=True, inline="always")
-def sq_between(a, i, b, j):  # noqa: ANN001, ANN202
-    """``sum_d (a[i, d] - b[j, d])^2`` in coordinate order."""
-    acc = 0.0
-    for d in range(a.shape[1]):
-        x = a[i, d] - b[j, d]
-        acc += x * x
-    return acc
+from tether.graph.kernels import sq_between
 
 
 @njit(cache=True)

@@ -16,8 +16,8 @@ import math
 import numpy as np
 from numba import njit
 
-from tether.continuous.connectivity.bookkeep_kernels import sq_between
 from tether.continuous.connectivity.pair_kernels import row_norm
+from tether.graph.kernels import sq_between
 
 
 @njit(cache=True)
