@@ -79,10 +79,9 @@ def test_the_marker_hashes_every_compiled_module_the_switch_governs() -> None:
     """A kernel inlines what it calls from other modules (numba's cache keys on the
     caller's file only), so every module of cached kernels that ``TETHER_JIT`` switches
     must change the marker; the environments compile their own kernels apart."""
-    src = Path(jit.__file__).parent
     compiled = {
-        path.relative_to(src).as_posix()
-        for path in src.rglob("*.py")
+        path.relative_to(PACKAGE).as_posix()
+        for path in PACKAGE.rglob("*.py")
         if "@njit(cache=True" in path.read_text() and path.parent.name != "envs"
     }
     assert compiled - set(jit.KERNEL_MODULES) == set()

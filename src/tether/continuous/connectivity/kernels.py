@@ -366,21 +366,17 @@ def warm_up() -> None:
     field_below_kernel(q, np.zeros(1), ones, ones, np.zeros(3), 1.0, 0.5, 1.0)
     force_warm_up(q, pairs, out, nu)
     laplacian_dense_kernel(3, pairs, out[0])
-    for obs in (None, index):
-        points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
-            obs.kernel_state(3)  # fmt: skip
-        evaluate_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, True, obs is not None, points_, tree,
-                        table, used, 0.25, fld, 1)  # fmt: skip
     lapack_warm_up()
+    radii, potential = (2.5, 6.0, 0.75, 1.75, 1.0, 2.5), (0.0, 0.5, 1.0)
     for obs in (None, index):
         points_, tree, table, used, fld = no_obstacles(3) if obs is None else \
             obs.kernel_state(3)  # fmt: skip
+        has = obs is not None
+        evaluate_kernel(q, *radii, True, has, points_, tree, table, used, 0.25, fld, 1)
         for lapack in (False, True):
-            evaluate_fiedler_kernel(q, 2.5, 6.0, 0.75, 1.75, 1.0, 2.5, obs is not None, points_,
-                                    tree, table, used, 0.25, fld, 1, nu, lapack, small.SETTINGS,
-                                    78, 30, (0.0, 0.5, 1.0), True)  # fmt: skip
-            if obs is None:
-                radii = (2.5, 6.0, 0.75, 1.75, 1.0, 2.5)
+            evaluate_fiedler_kernel(q, *radii, has, points_, tree, table, used, 0.25, fld, 1, nu,
+                                    lapack, small.SETTINGS, 78, 30, potential, True)  # fmt: skip
+            if not has:
                 evaluate_fiedler_free_kernel(q, *radii, nu, lapack, small.SETTINGS, 78, 30,
-                                             (0.0, 0.5, 1.0), True)  # fmt: skip
+                                             potential, True)  # fmt: skip
     small_fiedler_kernel(np.array([[1.0, -1.0], [-1.0, 1.0]]), nu[:2].copy(), *small.SETTINGS)
