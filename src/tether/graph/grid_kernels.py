@@ -21,6 +21,23 @@ from numba import njit
 CELL_SLACK = 1.0 + 1e-6
 
 
+@njit(cache=True, inline="always")
+def cell_order(key, n_cells):  # noqa: ANN001, ANN201
+    """Counting sort of points by cell: ``(start, order)`` with the points of cell ``c``
+    at ``order[start[c]:start[c + 1]]``, in their own order (stable), ``O(n + cells)``."""
+    start = np.zeros(n_cells + 1, np.int64)
+    for i in range(len(key)):
+        start[key[i] + 1] += 1
+    for c in range(n_cells):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(len(key), np.int64)
+    for i in range(len(key)):
+        order[fill[key[i]]] = i
+        fill[key[i]] += 1
+    return start, order
+
+
 @njit(cache=True)
 def pairs_within_grid_kernel(q, r, ncell):  # noqa: ANN001, ANN201
     """Pairs within ``r`` of the points ``q`` (``(n, dim)``); ``ncell``: cells per axis.
@@ -45,16 +62,7 @@ def pairs_within_grid_kernel(q, r, ncell):  # noqa: ANN001, ANN201
     n_cells = 1
     for d in range(dim):
         n_cells *= ncell[d]
-    start = np.zeros(n_cells + 1, np.int64)  # counting sort by cell (point order kept)
-    for i in range(n):
-        start[key[i] + 1] += 1
-    for c in range(n_cells):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    order = np.empty(n, np.int64)
-    for i in range(n):
-        order[fill[key[i]]] = i
-        fill[key[i]] += 1
+    start, order = cell_order(key, n_cells)
     n_off = 3**dim
     cap = 8 * n + 8
     out = np.empty((cap, 2), np.int64)

@@ -14,6 +14,8 @@ import math
 import numpy as np
 from numba import njit
 
+from tether.graph.grid_kernels import cell_order
+
 #: below this many robots the pairs are found by testing all of them
 BRUTE_MAX_N = 128
 
@@ -120,16 +122,7 @@ def _pairs_dense_cells(q, r, code, size, n_cells, out):  # noqa: ANN001, ANN202,
     are one slice; the same cubes, distance test and order as the binary search.
     """
     n, dim = q.shape
-    start = np.zeros(n_cells + 1, np.int64)
-    for k in range(n):
-        start[code[k] + 1] += 1
-    for c in range(n_cells):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    order = np.empty(n, np.int64)
-    for k in range(n):
-        order[fill[code[k]]] = k
-        fill[code[k]] += 1
+    start, order = cell_order(code, n_cells)
     n_nb = 3**dim
     shift = np.zeros(n_nb, np.int64)
     for nb in range(n_nb):
