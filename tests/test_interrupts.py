@@ -17,10 +17,18 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
 from tether.config import load_scenario
+from tether.interrupts import Stopped, stop_on_signals
+from tether.paths.trajectory import Polyline
+from tether.runfolder import RunFolder
+from tether.sensing import SensorModel
+from tether.silent import SilentStrategy
+from tether.sim import TeamState, simulate
+from tether.world import World
 
 #: a hang guard, not a timing: the command must stop long before this
 DEADLINE_S = 120.0
@@ -155,3 +163,42 @@ def test_ctrl_c_ends_view_serve_normally(tmp_path) -> None:
     exit_code, out, err = _stop(proc, signal.SIGINT)
     assert exit_code == 0, err
     assert "serving" in out and err == ""
+
+
+class _SignalsWhileCollected:
+    """Sends ``signum`` to its own process from ``__del__``: the handler's exception is
+    raised where Python only prints "Exception ignored" and carries on."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+
+    def __del__(self) -> None:
+        signal.raise_signal(self.signum)
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+@pytest.mark.parametrize(("signum", "code", "name"), SIGNALS)
+def test_a_stop_swallowed_by_a_finalizer_stops_the_next_step(signum, code, name) -> None:
+    strategy = SilentStrategy(d_max_m=15.0, trajectory=Polyline([[0, 0], [1000, 0]]))
+    start = TeamState.at_rest(np.array([[0.0, 0.0], [5.0, 0.0]]))
+    with pytest.raises(Stopped) as stop, stop_on_signals():
+        _SignalsWhileCollected(signum)  # collected at once: the stop is swallowed there
+        simulate(World(dim=2), SensorModel(15.0), strategy, start,
+                 dt_s=0.1, max_steps=50, rng=np.random.default_rng(0))  # fmt: skip
+    assert (stop.value.code, str(stop.value)) == (code, f"interrupted by {name}")
+    # the stop was handled: the next block runs to its end
+    with stop_on_signals():
+        result = simulate(World(dim=2), SensorModel(15.0), strategy, start,
+                          dt_s=0.1, max_steps=5, rng=np.random.default_rng(0))  # fmt: skip
+    assert result.steps == 5
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_stop_swallowed_while_writing_keeps_the_run_folder_out(tmp_path) -> None:
+    folder = RunFolder(tmp_path / "run")
+    with pytest.raises(Stopped), stop_on_signals():
+        folder.write_json("part.json", {"written": True})
+        _SignalsWhileCollected(signal.SIGINT)  # swallowed between two writes
+        folder.commit({"ok": True})
+    folder.abort()
+    assert not (tmp_path / "run").exists()

@@ -8,6 +8,11 @@ exception), worker processes are stopped, and the command exits with ``128 + sig
 (130 for SIGINT, 143 for SIGTERM). :class:`Stopped` derives from ``SystemExit``: code
 that catches ``Exception`` lets it through, and a process that does not catch it exits
 with that code.
+
+A signal that arrives while Python runs a weak-reference callback or a ``__del__``
+raises there, where Python prints "Exception ignored" and carries on. So the handler
+also records the signal, and long loops call :func:`raise_if_stopped` once per
+iteration: a stop that was swallowed is raised again at the next step.
 """
 
 from __future__ import annotations
@@ -18,10 +23,13 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-__all__ = ["Stopped", "stop_on_signals"]
+__all__ = ["Stopped", "raise_if_stopped", "stop_on_signals"]
 
 #: the signals a command stops on
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+#: the signal that asked this process to stop, while a handler of this module is set
+_received: int | None = None
 
 
 class Stopped(SystemExit):
@@ -44,6 +52,21 @@ class Stopped(SystemExit):
         return f"interrupted by {self.signal_name}{how}" + (f": {self.note}" if self.note else "")
 
 
+def raise_if_stopped() -> None:
+    """Raise :class:`Stopped` if a stop signal was received (call once per loop iteration).
+
+    Without a signal this is one global read. With one, the first :class:`Stopped` has
+    normally unwound the loop already; this raises it again only where it was swallowed.
+    """
+    if _received is not None:
+        raise Stopped(_received)
+
+
+def _record(signum: int | None) -> None:
+    global _received
+    _received = signum
+
+
 @contextmanager
 def stop_on_signals(*, once: bool = True) -> Iterator[None]:
     """Raise :class:`Stopped` on SIGINT and SIGTERM inside the block (main thread only).
@@ -63,6 +86,7 @@ def stop_on_signals(*, once: bool = True) -> Iterator[None]:
         if fired and once:
             return
         fired = True
+        _record(signum)
         raise Stopped(signum)
 
     previous = {s: signal.signal(s, handler) for s in SIGNALS}
@@ -71,6 +95,7 @@ def stop_on_signals(*, once: bool = True) -> Iterator[None]:
     finally:
         for s, old in previous.items():
             signal.signal(s, old)
+        _record(None)  # the stop is handled; a later block starts afresh
 
 
 def raise_on_sigterm() -> None:
@@ -80,6 +105,7 @@ def raise_on_sigterm() -> None:
 
     def handler(signum: int, frame: FrameType | None) -> None:
         signal.signal(signal.SIGTERM, signal.SIG_IGN)  # one stop is enough
+        _record(signum)
         raise Stopped(signum)
 
     signal.signal(signal.SIGTERM, handler)

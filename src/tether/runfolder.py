@@ -32,6 +32,7 @@ from tether.atomic import UMASK
 from tether.atomic import atomic_write as atomic_write  # re-exported
 from tether.atomic import check_output_path as check_output_path  # re-exported
 from tether.errors import OutputError
+from tether.interrupts import raise_if_stopped
 
 SUMMARY = "summary.json"
 SCENARIO = "scenario.yaml"
@@ -319,8 +320,10 @@ class RunFolder:
         """Write the marker, ``summary.json`` last, and move the staged folder onto :attr:`path`.
 
         The folder at :attr:`path` is checked again first (a user may have put a file into
-        it while the run was simulating): anything tether did not write stops the commit.
+        it while the run was simulating): anything tether did not write stops the commit,
+        and so does a stop signal that was swallowed while the folder was being written.
         """
+        raise_if_stopped()
         tops = [name.split("/", 1)[0] for name in [*self.written, SUMMARY]]
         write_json(self.staging / MARKER, _marker(tops))
         write_json(self.file(SUMMARY), summary)

@@ -34,6 +34,7 @@ from threadpoolctl import threadpool_limits
 from tether import jit
 from tether.graph import component_count, fiedler, pairs_within
 from tether.graph.structure import KERNEL_PAIRS_MAX_N
+from tether.interrupts import raise_if_stopped
 from tether.sensing import Observation, SensorModel, sense
 from tether.world.world import World
 
@@ -377,6 +378,7 @@ def _loop(
     obs = strategy.sense(state, world, sensor, rng)
     step = 0
     while True:
+        raise_if_stopped()  # a Ctrl-C that a weak-reference callback swallowed
         rec = team_metrics(step, step * dt_s, state.positions, obs, collision_distance_m)
         records.append(rec)
         if recorder is not None:

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from tether.errors import TetherError
-from tether.interrupts import Stopped, raise_on_sigterm
+from tether.interrupts import Stopped, raise_if_stopped, raise_on_sigterm
 from tether.lifetime import die_with_parent
 from tether.registry import Registry
 
@@ -105,6 +105,8 @@ def _serial(trials: list[Trial], workers: int, address: str | None) -> Iterator[
         yield run_trial(trial)
 
 
+#: seconds between checks for a stop signal while waiting for trials
+POLL_S = 0.5
 #: seconds a stopped worker has to remove the run folder it was writing before it is killed
 STOP_GRACE_S = 10.0
 
@@ -146,7 +148,8 @@ def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterat
         submitted = {pool.submit(_trial_in_worker, t): t for t in trials}
         pending = set(submitted)
         while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+            raise_if_stopped()  # a Ctrl-C that a weak-reference callback swallowed
             for future in done:
                 try:
                     yield future.result()
