@@ -4,11 +4,11 @@ The block between ``<!-- 3d-map-example -->`` markers is the whole scenario (und
 lines). It names ``../shared/maps/offices.png`` beside the repository; where that folder
 is absent the test runs it on tether's shipped map of the same kind (``office.png``).
 Checked against independent oracles: the walls are the map, max-pooled by hand, in every
-layer; every robot position recorded over the first 200 steps is inside the building, in free space and under
-the ceiling; the paths planned (A* and B-spline, the strategy's own functions and
-settings) from each robot's start to its first target stay under the ceiling in free
-space. Then the point-cloud scene's floor and ceiling, its sparse-points warning and
-the grid rounding.
+layer; every robot position recorded over the first 200 steps is inside the building,
+in free space and under the ceiling; the paths planned (A* and B-spline, the
+strategy's own functions and settings) from each robot's start to its first target stay
+under the ceiling in free space. Then the point-cloud scene's floor and ceiling, its
+sparse-points warning and the grid rounding.
 """
 
 from __future__ import annotations
