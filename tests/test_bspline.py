@@ -22,6 +22,7 @@ from tether.paths.bspline import (
     remaining_length,
     smooth_path,
 )
+from tether.paths.bspline import _resample as resample_polyline  # noqa: PLC2701
 from tether.paths.trajectory import Polyline
 from tether.world.grid import OccupancyGrid
 
@@ -296,3 +297,22 @@ def test_polyline_fallback(monkeypatch):
     # FITPACK failing everywhere: the polyline too
     monkeypatch.setattr(bspline, "_fit", lambda *args: None)
     assert smooth_path(wp, plan).kind == "polyline"
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_the_fit_data_are_each_segment_cut_evenly_every_vertex_kept(seed: int) -> None:
+    """The samples a spline is fitted to: segment by segment, ``np.linspace`` cut into the
+    fewest pieces no longer than the spacing (the oracle), bit for bit, with the chord
+    parameter from 0 to 1."""
+    rng = np.random.default_rng(seed)
+    pts = np.cumsum(rng.normal(size=(rng.integers(2, 30), rng.integers(2, 4))), axis=0)
+    pts = np.round(pts * 4) / 4 if seed % 2 else pts * 10.0 ** rng.integers(-1, 2)
+    pts = pts[np.r_[True, np.any(np.diff(pts, axis=0) != 0, axis=1)]]  # as smooth_path gives
+    spacing = float(rng.uniform(0.05, 2.0))
+    oracle = [pts[:1]]
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        n = max(math.ceil(np.linalg.norm(b - a) / spacing), 1)
+        oracle.append(a + np.linspace(0.0, 1.0, n + 1)[1:, None] * (b - a))
+    dense, u = resample_polyline(pts, spacing)
+    assert np.array_equal(dense, np.concatenate(oracle))
+    assert u[0] == 0.0 and u[-1] == 1.0 and np.all(np.diff(u) > 0)

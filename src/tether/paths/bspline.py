@@ -176,11 +176,13 @@ def _chord_param(pts: np.ndarray) -> np.ndarray:
 
 def _resample(pts: np.ndarray, spacing_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Polyline points every ``<= spacing_m`` keeping every vertex, and their chord param."""
-    out = [pts[:1]]
-    for a, b in zip(pts[:-1], pts[1:], strict=True):
-        n = max(int(np.ceil(np.linalg.norm(b - a) / spacing_m)), 1)
-        out.append(a + np.linspace(0.0, 1.0, n + 1)[1:, None] * (b - a))
-    dense = np.concatenate(out)
+    delta = np.diff(pts, axis=0)
+    pieces = np.maximum(np.ceil(np.linalg.norm(delta, axis=1) / spacing_m), 1).astype(np.int64)
+    seg = np.repeat(np.arange(len(delta)), pieces)
+    k = np.arange(len(seg)) - np.repeat(np.cumsum(pieces) - pieces, pieces) + 1  # 1..n each
+    t = k * (1.0 / pieces[seg])  # as np.linspace(0, 1, n + 1)[1:]: k * (1 / n), the end 1
+    t[np.cumsum(pieces) - 1] = 1.0
+    dense = np.concatenate([pts[:1], pts[:-1][seg] + t[:, None] * delta[seg]])
     return dense, _chord_param(dense)
 
 
