@@ -18,7 +18,7 @@ folder's tables::
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
@@ -91,7 +91,9 @@ class TrajectoryRecorder:
         return np.vstack([self.positions[k], self.fixed])
 
     def step_columns(self) -> dict[str, list[Any]]:
-        rows = [asdict(r) | v for r, v in zip(self.steps, self.values, strict=True)]
+        names = [f.name for f in fields(StepRecord)]  # scalars: no deep copy (asdict's)
+        rows = [{k: getattr(r, k) for k in names} | v
+                for r, v in zip(self.steps, self.values, strict=True)]  # fmt: skip
         keys = list(dict.fromkeys(k for r in rows for k in r))
         return {k: [r.get(k) for r in rows] for k in keys}
 
