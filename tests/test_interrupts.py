@@ -14,6 +14,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -21,7 +22,9 @@ import numpy as np
 import pytest
 import yaml
 
-from tether.config import load_scenario
+from tether import interrupts
+from tether.config import load_scenario, scenario_from_dict
+from tether.experiments.sweep import run_sweep
 from tether.interrupts import Stopped, stop_on_signals
 from tether.paths.trajectory import Polyline
 from tether.runfolder import RunFolder
@@ -202,3 +205,23 @@ def test_a_stop_swallowed_while_writing_keeps_the_run_folder_out(tmp_path) -> No
         folder.commit({"ok": True})
     folder.abort()
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("executor", ["processes", "dask"])
+def test_a_swallowed_stop_ends_a_sweep_s_wait_for_its_workers(executor, tmp_path) -> None:
+    """The state a finalizer leaves behind (a stop recorded, its exception swallowed) while
+    the sweep waits on a trial that never ends: the wait must end with :class:`Stopped`."""
+    if executor == "dask":
+        pytest.importorskip("distributed")
+    data = load_scenario("silent_demo").model_dump(mode="json")
+    data["output"]["figures"] = False
+    data["strategy"]["params"]["trajectory"]["waypoints"] = [[0, 0], [100000, 0]]
+    data["sim"]["max_steps"] = 100000
+    swallowed = threading.Timer(2.0, interrupts._record, args=(signal.SIGINT,))  # noqa: SLF001
+    with pytest.raises(Stopped) as stop, stop_on_signals():
+        swallowed.start()
+        run_sweep(scenario_from_dict(data, "long.yaml"), tmp_path / "sweep", seeds=1,
+                  executor=executor, workers=1)  # fmt: skip
+    swallowed.join()
+    assert stop.value.code == 130

@@ -164,7 +164,8 @@ def _processes(trials: list[Trial], workers: int, address: str | None) -> Iterat
 @EXECUTORS.register("dask")
 def _dask(trials: list[Trial], workers: int, address: str | None) -> Iterator[TrialOutcome]:
     try:
-        from distributed import Client, LocalCluster, as_completed
+        from distributed import Client, LocalCluster
+        from distributed import wait as wait_for
     except ImportError:
         raise TetherError(
             "executor 'dask' needs dask.distributed; install it with: pip install 'tether[dask]'"
@@ -187,11 +188,18 @@ def _dask(trials: list[Trial], workers: int, address: str | None) -> Iterator[Tr
         with client:
             futures = client.map(run_trial, trials, pure=False)
             trial_of = {f.key: t for f, t in zip(futures, trials, strict=True)}
-            for future in as_completed(futures):
+            pending = set(futures)
+            while pending:
                 try:
-                    yield future.result()
-                except Exception as exc:  # the worker died or the scheduler went away
-                    yield failed(trial_of[future.key], exc)
+                    done, pending = wait_for(pending, timeout=POLL_S, return_when="FIRST_COMPLETED")
+                except TimeoutError:  # distributed's wait raises when nothing finished in time
+                    done = set()
+                raise_if_stopped()  # a Ctrl-C that a weak-reference callback swallowed
+                for future in done:
+                    try:
+                        yield future.result()
+                    except Exception as exc:  # the worker died or the scheduler went away
+                        yield failed(trial_of[future.key], exc)
     finally:
         if cluster is not None:
             cluster.close()
