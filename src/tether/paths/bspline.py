@@ -178,10 +178,11 @@ def _resample(pts: np.ndarray, spacing_m: float) -> tuple[np.ndarray, np.ndarray
     """Polyline points every ``<= spacing_m`` keeping every vertex, and their chord param."""
     delta = np.diff(pts, axis=0)
     pieces = np.maximum(np.ceil(np.linalg.norm(delta, axis=1) / spacing_m), 1).astype(np.int64)
+    ends = np.cumsum(pieces)  # one past each segment's last sample
     seg = np.repeat(np.arange(len(delta)), pieces)
-    k = np.arange(len(seg)) - np.repeat(np.cumsum(pieces) - pieces, pieces) + 1  # 1..n each
+    k = np.arange(len(seg)) - np.repeat(ends - pieces, pieces) + 1  # 1..n each
     t = k * (1.0 / pieces[seg])  # as np.linspace(0, 1, n + 1)[1:]: k * (1 / n), the end 1
-    t[np.cumsum(pieces) - 1] = 1.0
+    t[ends - 1] = 1.0
     dense = np.concatenate([pts[:1], pts[:-1][seg] + t[:, None] * delta[seg]])
     return dense, _chord_param(dense)
 

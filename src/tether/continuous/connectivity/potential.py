@@ -31,16 +31,22 @@ from scipy.special import expit
 from tether.continuous.connectivity.params import ConnectivityParams
 
 
-def smooth_step(x: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
-    """``S(x; lo, hi)`` and ``dS/dx`` (see the module docstring)."""
-    x = np.asarray(x, dtype=float)
-    width = hi - lo
-    t = (x - lo) / width
+def _band(
+    x: np.ndarray, lo: float, hi: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``t = (x - lo) / (hi - lo)``, where ``0 < t < 1``, ``t`` there (1/2 outside, where it
+    is not used) and ``g = 1/t - 1/(1 - t)`` of it: ``S = expit(-g)`` inside the band."""
+    t = (np.asarray(x, dtype=float) - lo) / (hi - lo)
     inside = (t > 0.0) & (t < 1.0)
     tc = np.where(inside, t, 0.5)
-    g = 1.0 / tc - 1.0 / (1.0 - tc)
+    return t, inside, tc, 1.0 / tc - 1.0 / (1.0 - tc)
+
+
+def smooth_step(x: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    """``S(x; lo, hi)`` and ``dS/dx`` (see the module docstring)."""
+    t, inside, tc, g = _band(x, lo, hi)
     s_in = expit(-g)
-    ds_in = s_in * expit(g) * (1.0 / tc**2 + 1.0 / (1.0 - tc) ** 2) / width
+    ds_in = s_in * expit(g) * (1.0 / tc**2 + 1.0 / (1.0 - tc) ** 2) / (hi - lo)
     s = np.where(inside, s_in, (t >= 1.0).astype(float))
     ds = np.where(inside, ds_in, 0.0)
     return s, ds
@@ -48,13 +54,8 @@ def smooth_step(x: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.nda
 
 def smooth_step_log_derivative(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """``S'(x) / S(x)`` for ``x > lo`` (0 for ``x <= lo`` and ``x >= hi``), without dividing."""
-    x = np.asarray(x, dtype=float)
-    width = hi - lo
-    t = (x - lo) / width
-    inside = (t > 0.0) & (t < 1.0)
-    tc = np.where(inside, t, 0.5)
-    g = 1.0 / tc - 1.0 / (1.0 - tc)
-    r = expit(g) * (1.0 / tc**2 + 1.0 / (1.0 - tc) ** 2) / width
+    _, inside, tc, g = _band(x, lo, hi)
+    r = expit(g) * (1.0 / tc**2 + 1.0 / (1.0 - tc) ** 2) / (hi - lo)
     return np.where(inside, r, 0.0)
 
 
