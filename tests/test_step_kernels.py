@@ -59,7 +59,7 @@ def test_fiedler_kernel_is_fiedler(method: str, seed: int) -> None:
     from tether.continuous.connectivity.kernels import fiedler_kernel
 
     rng = np.random.default_rng(seed)
-    for n in (17, 35, 80):
+    for n in (2, 5, 16, 17, 35, 80):  # up to 16 the full eigh, then the subset solvers
         pairs, w = _graph(rng, n, 0.15)
         lap = laplacian_dense(n, pairs, w)
         _, exact = fiedler(n, pairs, w, method="lapack")
@@ -95,19 +95,20 @@ def test_small_solver_failure_falls_back_to_dsyevr_in_the_kernel() -> None:
     assert lam == pytest.approx(2.0 - 2.0 * np.cos(2 * np.pi / n), rel=1e-12)
 
 
+@pytest.mark.parametrize("n", [10, 30])
 @pytest.mark.parametrize("method", ["auto", "lapack"])
-def test_disconnected_graph_is_left_to_fiedler(method: str) -> None:
+def test_disconnected_graph_is_left_to_fiedler(method: str, n: int) -> None:
     """lambda2 at rounding level: the kernel does not decide; ``fiedler`` gives exactly 0
-    and a component vector (what a kernel returning dsyevr's tiny value would miss)."""
+    and a component vector (what a kernel returning eigh's or dsyevr's tiny value would
+    miss)."""
     from tether.continuous.connectivity.kernels import fiedler_kernel
 
     rng = np.random.default_rng(5)
-    n = 30
     pairs, w = _graph(rng, n, 0.2)
-    cut = (pairs[:, 0] < 12) != (pairs[:, 1] < 12)
+    cut = (pairs[:, 0] < n // 3) != (pairs[:, 1] < n // 3)
     w[cut] = 0.0
     lap = laplacian_dense(n, pairs, w)
-    guess = np.where(np.arange(n) < 12, 1.0, -0.5) + rng.normal(0, 0.01, n)
+    guess = np.where(np.arange(n) < n // 3, 1.0, -0.5) + rng.normal(0, 0.01, n)
     decided, *_ = fiedler_kernel(lap, len(pairs), guess, method == "lapack", small.SETTINGS,
                                  *_syevr_lwork(n))  # fmt: skip
     assert not decided

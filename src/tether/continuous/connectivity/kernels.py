@@ -4,9 +4,10 @@
 search: :mod:`tether.continuous.connectivity.pair_kernels`.)
 
 :func:`evaluate_fiedler_kernel` is one sub-step's evaluation in one call: the weights,
-the eigenpair as :func:`tether.graph.fiedler.fiedler` finds it for ``17 <= n <= 400``
-robots from the previous Fiedler vector (``method="auto"``: the certified small solver,
-``dsyevr`` when it cannot certify; ``"lapack"``: ``dsyevr``, through
+the eigenpair as :func:`tether.graph.fiedler.fiedler` finds it for ``2 <= n <= 400``
+robots from the previous Fiedler vector (up to ``DENSE_MAX_N = 16`` robots the full
+``eigh``, LAPACK ``dsyevd`` as numpy's; above, ``method="auto"``: the certified small
+solver, ``dsyevr`` when it cannot certify; ``"lapack"``: ``dsyevr``, through
 :mod:`tether.graph.lapack_kernels`, the same call as scipy's wrapper) and optionally
 the exact force of eq. (17): the same routines in the same order as the Python chain
 ``compute_weights`` / ``WeightedGraph.fiedler`` / ``gradient.exact_force``, so the
@@ -35,7 +36,7 @@ from tether.continuous.connectivity.force_kernels import exact_force_kernel
 from tether.continuous.connectivity.pair_kernels import pairs_below, pairs_in_range, row_norm
 from tether.continuous.connectivity.potential_kernels import log_derivative1, smooth_step1
 from tether.graph import small
-from tether.graph.fiedler import _TINY_REL
+from tether.graph.fiedler import _TINY_REL, DENSE_MAX_N
 from tether.graph.kernels import laplacian_dense_kernel
 from tether.graph.lapack_kernels import syevr_second_kernel
 from tether.graph.small import OK
@@ -253,18 +254,23 @@ def _maybe_tiny(lam, lap, m):  # noqa: ANN001, ANN202
 @njit(cache=True)
 def fiedler_kernel(lap, m, guess, lapack, small, lwork, liwork):  # noqa: ANN001, ANN201, PLR0913
     """:func:`tether.graph.fiedler.fiedler` of a dense Laplacian with ``m`` links from
-    ``guess`` (``17 <= n <= 400``): ``(decided, lambda2, vector, status)``.
+    ``guess`` (``2 <= n <= 400``): ``(decided, lambda2, vector, status)``.
 
-    ``lapack``: ``dsyevr`` (``method="lapack"``), else the small solver with the settings
-    ``small`` first (``"auto"``; ``status`` is its status, -1 if it did not run).
-    ``decided = False``: the caller must run ``fiedler`` (lambda2 may be at rounding
-    level, or ``dsyevr`` failed).
+    Up to ``DENSE_MAX_N`` nodes the full ``eigh`` (numba's calls LAPACK ``dsyevd`` as
+    numpy's does: the same bits). Above, ``lapack``: ``dsyevr`` (``method="lapack"``),
+    else the small solver with the settings ``small`` first (``"auto"``; ``status`` is
+    its status, -1 if it did not run). ``decided = False``: the caller must run
+    ``fiedler`` (lambda2 may be at rounding level, or ``dsyevr`` failed).
     """
     status = -1
     lam = 0.0
     vec = guess
     solved = False
-    if not lapack:
+    if lap.shape[0] <= DENSE_MAX_N:
+        vals, vecs = np.linalg.eigh(lap)
+        lam, vec = max(vals[1], 0.0), vecs[:, 1].copy()
+        solved = True
+    elif not lapack:
         status, lam, vec, _, _ = small_fiedler_kernel(lap, guess, *small)
         solved = status == OK
     if not solved:

@@ -34,7 +34,7 @@ import numpy as np
 from tether import floats, jit
 from tether.continuous.connectivity.params import ConnectivityParams
 from tether.continuous.connectivity.potential import smooth_step, smooth_step_log_derivative
-from tether.graph import DENSE_MAX_N, SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
+from tether.graph import SUBSET_MAX_N, fiedler, laplacian_dense, pairs_within, small
 from tether.graph.fiedler import Method, _syevr_lwork
 from tether.graph.warm import WarmState
 from tether.world.clearance import ObstacleIndex, einsum_order
@@ -167,7 +167,7 @@ def compute_weights(
         k-d tree otherwise.
     guess
         The Fiedler vector the caller will pass to :meth:`WeightedGraph.fiedler`: with
-        the kernels, a team of ``DENSE_MAX_N < n <= SUBSET_MAX_N`` robots gets its
+        the kernels, a team of ``2 <= n <= SUBSET_MAX_N`` robots gets its
         eigenpair in the same compiled call as its weights
         (:func:`tether.continuous.connectivity.kernels.evaluate_fiedler_kernel`);
         ``fiedler(guess=guess, method=method)`` then returns it (the same bits as
@@ -255,7 +255,7 @@ def _evaluate_kernel(
     slack = obstacles.cache_slack_m if has else 0.0
     radii = (params.rs_inner_m, params.rs_m, params.ro_m, params.ro_outer_m, params.rc_m,
              params.rc_outer_m)  # fmt: skip
-    fused = (guess is not None and DENSE_MAX_N < n <= SUBSET_MAX_N and len(guess) == n
+    fused = (guess is not None and 2 <= n <= SUBSET_MAX_N and len(guess) == n
              and method in ("auto", "lapack"))  # fmt: skip
     if fused:
         guess_c = np.ascontiguousarray(guess, dtype=float)
