@@ -64,7 +64,9 @@ where ``V`` is known.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from functools import cache
 from typing import Any, Literal, Protocol
 
 import numpy as np
@@ -174,11 +176,20 @@ class StepMemory:
     jump_n: float = 0.0  # recent force jumps, halved at every sub-step
 
 
+@cache
+def _kernels() -> Any:
+    """:mod:`~tether.continuous.connectivity.dynamics_kernels`, imported on first use (numba
+    only when kernels run; an import statement in a per-sub-step function costs
+    microseconds per call)."""
+    from tether.continuous.connectivity import dynamics_kernels
+
+    return dynamics_kernels
+
+
 def displacement_step(v: np.ndarray, force: np.ndarray, mass: float, delta_m: float) -> float:
     """The largest ``h`` with ``h |v_i| + h^2 |f_i| / m <= delta_m`` for every robot."""
     if jit.enabled():
-        from tether.continuous.connectivity.dynamics_kernels import displacement_kernel
-
+        displacement_kernel = _kernels().displacement_kernel
         return float(displacement_kernel(np.ascontiguousarray(v, dtype=float),
                                          np.ascontiguousarray(force, dtype=float), mass,
                                          delta_m))  # fmt: skip
@@ -201,8 +212,7 @@ def robot_step(
     """:func:`~tether.continuous.connectivity.robot.damped_step` then the box: ``(q+, v+, contacts,
     dissipated, speed_limit)`` (:func:`~tether.continuous.connectivity.robot.dissipation`)."""
     if jit.enabled():
-        from tether.continuous.connectivity.dynamics_kernels import step_kernel
-
+        step_kernel = _kernels().step_kernel
         corners = np.zeros((0, q.shape[1])) if box is None else np.ascontiguousarray(box, float)
         return step_kernel(np.ascontiguousarray(q, dtype=float),
                            np.ascontiguousarray(v, dtype=float),
@@ -243,8 +253,7 @@ def substep_terms(
     acceleration ``|v+ - v| / h`` of a robot.
     """
     if jit.enabled():
-        from tether.continuous.connectivity.dynamics_kernels import terms_kernel
-
+        terms_kernel = _kernels().terms_kernel
         c = np.ascontiguousarray
         return terms_kernel(c(q, dtype=float), c(v, dtype=float), c(q1, dtype=float),
                             c(v1, dtype=float), c(f, dtype=float), c(f1, dtype=float),
@@ -334,18 +343,18 @@ def integrate(
             f1, f_c1, h_move1 = system.forces(q1, v1, ev1[1])
             terms = substep_terms(q, v, q1, v1, f, f1, f_c, system.neighbours(ev1[1]), h_try,
                                   robot.mass_kg)  # fmt: skip
-            finite = bool(np.all(np.isfinite(f1)))  # an undefined force is never accepted
-            omega2, jump = (terms[0], terms[1]) if finite else (np.inf, np.inf)
+            finite = bool(np.isfinite(f1).all())  # an undefined force is never accepted
+            omega2, jump = (terms[0], terms[1]) if finite else (math.inf, math.inf)
             # the longest steps that would meet each test (the error's with a margin)
-            h_stiff = params.stiffness_target / np.sqrt(omega2) if omega2 > 0 else np.inf
-            h_err = 0.9 * np.sqrt(2.0 * robot.mass_kg * params.tolerance_m / jump) \
-                if jump > 0 else np.inf  # fmt: skip
+            h_stiff = params.stiffness_target / math.sqrt(omega2) if omega2 > 0 else math.inf
+            h_err = 0.9 * math.sqrt(2.0 * robot.mass_kg * params.tolerance_m / jump) \
+                if jump > 0 else math.inf  # fmt: skip
             error_m = 0.5 * h_try * h_try * jump / robot.mass_kg
             if h_try * h_try * omega2 <= params.stiffness_max**2 or error_m <= params.tolerance_m:
                 accepted = True
                 break
             stats.rejections += 1
-            h = min(0.5 * h_try, max(h_stiff, h_err)) if np.isfinite(jump) else 0.5 * h_try
+            h = min(0.5 * h_try, max(h_stiff, h_err)) if math.isfinite(jump) else 0.5 * h_try
         if guarded:  # enforce: no admissible step; stop and brake, never cross the invariant
             stats.stalls += 1
             v = np.zeros_like(v)
@@ -355,9 +364,9 @@ def integrate(
                 raise FloatingPointError(f"non-finite force after {params.max_retries} retries")
             stats.tolerance_misses += 1
         _, _, work, kinetic, speed, accel = terms
-        if np.isfinite(lam) and np.isfinite(ev1[0]):
+        if math.isfinite(lam) and math.isfinite(ev1[0]):
             residual = kinetic + system.potential(ev1[0]) - system.potential(lam) - work + diss
-            if np.isfinite(residual):
+            if math.isfinite(residual):
                 stats.energy_added_j += max(residual, 0.0)
                 stats.energy_net_j += residual
         stats.speed_limit_work_j += limit
@@ -375,8 +384,8 @@ def integrate(
         # the closest obstacle point, of the eigenvector of a repeated lambda2): the next
         # step is sized for the largest recent jump, not for this step's alone
         memory.jump_n = max(jump, 0.5 * memory.jump_n)
-        h_recent = 0.9 * np.sqrt(2.0 * robot.mass_kg * params.tolerance_m / memory.jump_n) \
-            if memory.jump_n > 0 else np.inf  # fmt: skip
+        h_recent = 0.9 * math.sqrt(2.0 * robot.mass_kg * params.tolerance_m / memory.jump_n) \
+            if memory.jump_n > 0 else math.inf  # fmt: skip
         memory.next_s = max(h_stiff, h_recent)
         if system.accept(q1, v1, ev1[1]):
             f1, f_c1, h_move1 = system.forces(q1, v1, ev1[1])

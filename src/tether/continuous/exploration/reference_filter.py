@@ -14,8 +14,13 @@ with the matrix exponential of the companion matrix (zero-order hold on ``q``).
 
 from __future__ import annotations
 
+from functools import cache
+from typing import Any
+
 import numpy as np
 import scipy.linalg
+
+from tether import jit
 
 PAPER_GAINS = (44.0, 707.0, 5090.0, 13692.0)
 
@@ -30,7 +35,7 @@ class ReferenceFilter:
         m = np.zeros((5, 5))
         m[:4, :4], m[:4, 4] = a, b
         e = scipy.linalg.expm(m * dt_s)  # [[A_d, B_d], [0, 1]]
-        self.a_d, self.b_d = e[:4, :4], e[:4, 4]
+        self.a_d, self.b_d = e[:4, :4].copy(), e[:4, 4].copy()
         q0 = np.asarray(q0, dtype=float)
         self.state = np.zeros((4,) + q0.shape)  # (derivative order, n, dim)
         self.state[0] = q0
@@ -43,3 +48,24 @@ class ReferenceFilter:
         """Advance one period with input ``q`` (held); returns the filtered positions."""
         self.state = np.tensordot(self.a_d, self.state, axes=1) + self.b_d[:, None, None] * q
         return self.state[0]
+
+    def advance(self, q: np.ndarray) -> tuple[float, float, float]:
+        """:meth:`update` with input ``q``, then the largest distance of a reference from
+        its robot and the largest speed and acceleration of a reference (compiled when
+        kernels run: the same bits)."""
+        if jit.enabled():
+            self.state, dev, speed, accel = _kernel()(
+                self.a_d, self.b_d, self.state, np.ascontiguousarray(q, dtype=float)
+            )
+            return dev, speed, accel
+        dev = np.linalg.norm(self.update(q) - q, axis=1).max()
+        speed, accel = (np.linalg.norm(self.state[k], axis=1).max() for k in (1, 2))
+        return float(dev), float(speed), float(accel)
+
+
+@cache
+def _kernel() -> Any:
+    """The compiled period (:mod:`.reference_filter_kernels`), imported on first use."""
+    from tether.continuous.exploration.reference_filter_kernels import reference_step_kernel
+
+    return reference_step_kernel

@@ -369,9 +369,8 @@ class MultiTargetStrategy(ConnectivityStrategy):
         if self.params.reference_filter:
             if self.filter is None:
                 self.filter = ReferenceFilter(q, dt)
-            dev = np.linalg.norm(self.filter.update(q_new) - q_new, axis=1)
-            self._filter_dev = max(self._filter_dev, float(dev.max()))
-            speed, accel = (np.linalg.norm(self.filter.state[k], axis=1).max() for k in (1, 2))
+            dev, speed, accel = self.filter.advance(q_new)
+            self._filter_dev = max(self._filter_dev, dev)
             self._filter_peak = np.maximum(self._filter_peak, [speed, accel])
         self._t_s = t_s
         if self._completion is None and pl.done():
