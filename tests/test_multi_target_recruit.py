@@ -12,7 +12,13 @@ import pytest
 from tether import jit
 from tether.comm import CommParams, MessageLayer
 from tether.config import load_scenario
-from tether.continuous.exploration.recruit import HelpFlood, RequestDepth, help_depth, help_force
+from tether.continuous.exploration.recruit import (
+    HelpFlood,
+    RequestDepth,
+    help_depth,
+    help_force,
+    help_rows,
+)
 from tether.record import TrajectoryRecorder
 from tether.runner import build
 from tether.sim import simulate
@@ -219,3 +225,34 @@ def test_help_lambda_factor_defaults_per_preset_and_can_be_switched_off() -> Non
     assert MultiTargetParams(preset="office").help_lambda_factor is None
     assert MultiTargetParams(preset="outdoor", help_lambda_factor=None).help_lambda_factor is None
     assert MultiTargetParams(preset="office", help_lambda_factor=0.5).help_lambda_factor == 0.5
+
+
+@pytest.mark.skipif(not jit.available(), reason="needs numba")
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("max_force_n", [10.0, np.inf])
+@pytest.mark.parametrize("lambda_factor", [None, 0.3])
+def test_help_rows_compiled_is_the_numpy_path(
+    dim: int, max_force_n: float, lambda_factor: float | None
+) -> None:
+    """The compiled helpers' rows equal the numpy path bit for bit; the other rows are
+    left as they were; a helper on its parent (distance 0) and one within the keep
+    distance get no pull."""
+    rng = np.random.default_rng(dim)
+    n = 30
+    q, v = rng.uniform(-8, 8, (n, dim)), rng.normal(0, 2, (n, dim))
+    f_ext, f_lambda = rng.normal(0, 5, (n, dim)), rng.normal(0, 50, (n, dim))
+    helpers = np.sort(rng.choice(n, 12, replace=False))
+    parents = rng.uniform(-8, 8, (12, dim))
+    parents[0] = q[helpers[0]]  # on its parent
+    parents[1] = q[helpers[1]] + 0.5  # within keep_m
+    kw = {"keep_m": 2.5, "kp": 4.0, "kv": 4.0, "max_force_n": max_force_n,
+          "lambda_factor": lambda_factor}  # fmt: skip
+    with jit.using(True):
+        got = help_rows(q, v, f_ext.copy(), f_lambda, helpers, parents, **kw)
+    with jit.using(False):
+        want = help_rows(q, v, f_ext.copy(), f_lambda, helpers, parents, **kw)
+    assert np.array_equal(got, want)
+    others = np.setdiff1d(np.arange(n), helpers)
+    assert np.array_equal(got[others], f_ext[others])
+    g = 1.0 if lambda_factor is None else lambda_factor
+    np.testing.assert_allclose(got[helpers[:2]], -(1.0 - g) * f_lambda[helpers[:2]])

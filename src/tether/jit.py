@@ -43,6 +43,7 @@ KERNEL_MODULES = (
     "continuous/exploration/substep_kernels.py",
     "continuous/exploration/step_kernels.py",
     "continuous/exploration/reference_filter_kernels.py",
+    "continuous/exploration/recruit_kernels.py",
     "continuous/connectivity/force_kernels.py",
     "continuous/connectivity/dynamics_kernels.py",
     "continuous/connectivity/pair_kernels.py",

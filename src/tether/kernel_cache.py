@@ -26,6 +26,7 @@ def warm_up() -> float:
     from tether.continuous.connectivity.bookkeep_kernels import warm_up as bookkeep
     from tether.continuous.connectivity.dynamics_kernels import warm_up as dynamics
     from tether.continuous.connectivity.kernels import warm_up as connectivity
+    from tether.continuous.exploration.recruit_kernels import warm_up as recruit
     from tether.continuous.exploration.reference_filter_kernels import warm_up as reference
     from tether.continuous.exploration.round_kernels import warm_up as rounds
     from tether.continuous.exploration.step_kernels import warm_up as steps
@@ -49,7 +50,7 @@ def warm_up() -> float:
     for module_warm_up in (connectivity, substep, tracking, steps, line_of_sight, dynamics,
                            rounds, bookkeep, comm, steiner, ilp, steering, sensing, draws, grid,
                            metrics, astar, links, geodesic, expgraph, depth, apx,
-                           reference):  # fmt: skip
+                           reference, recruit):  # fmt: skip
         module_warm_up()
     seconds = time.perf_counter() - start
     jit.write_marker(seconds)

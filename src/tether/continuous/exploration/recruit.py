@@ -42,8 +42,12 @@ robots' force is unchanged. Measured on the campaign's helped trials with
 
 from __future__ import annotations
 
+from functools import cache
+from typing import Any
+
 import numpy as np
 
+from tether import jit
 from tether.comm import MessageLayer, smallest_per_receiver
 from tether.continuous.exploration.travel import saturate
 
@@ -180,3 +184,43 @@ def help_force(
     far = d > keep_m
     pull = np.where(far, kp * (d - keep_m) * gap / np.maximum(d, 1e-12) - kv * v, 0.0)
     return saturate(pull, max_force_n)
+
+
+def help_rows(
+    q: np.ndarray,
+    v: np.ndarray,
+    f: np.ndarray,
+    f_lambda: np.ndarray,
+    helpers: np.ndarray,
+    parent_m: np.ndarray,
+    *,
+    keep_m: float,
+    kp: float,
+    kv: float,
+    max_force_n: float,
+    lambda_factor: float | None,
+) -> np.ndarray:
+    """``f`` (the team's external force) with the rows of ``helpers`` replaced, in place.
+
+    Each helper follows its parent (:func:`help_force`; a secondary's ``f_i`` too); with
+    ``lambda_factor = g`` its ``f_lambda`` is scaled by ``g``: ``(1 - g) f_lambda`` is
+    subtracted. Compiled when kernels run (:mod:`.recruit_kernels`, the same bits).
+    """
+    if jit.enabled():
+        factor = np.nan if lambda_factor is None else float(lambda_factor)
+        _kernel()(q, v, f, f_lambda, np.asarray(helpers, dtype=np.int64), parent_m,
+                  float(keep_m), float(kp), float(kv), float(max_force_n), factor)  # fmt: skip
+        return f
+    f[helpers] = help_force(q[helpers], v[helpers], parent_m, keep_m=keep_m, kp=kp, kv=kv,
+                            max_force_n=max_force_n)  # fmt: skip
+    if lambda_factor is not None:
+        f[helpers] -= (1.0 - lambda_factor) * f_lambda[helpers]
+    return f
+
+
+@cache
+def _kernel() -> Any:
+    """:func:`.recruit_kernels.help_rows_kernel`, imported on first use (numba)."""
+    from tether.continuous.exploration.recruit_kernels import help_rows_kernel
+
+    return help_rows_kernel

@@ -40,7 +40,7 @@ from tether.continuous.exploration.motion import (
     traveling_forces,
 )
 from tether.continuous.exploration.params import MultiTargetParams
-from tether.continuous.exploration.recruit import HelpFlood, RequestDepth, help_force
+from tether.continuous.exploration.recruit import HelpFlood, RequestDepth, help_rows
 from tether.continuous.exploration.reference_filter import ReferenceFilter
 from tether.continuous.exploration.roles import (
     ANCHOR,
@@ -294,22 +294,18 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._step = ctx.step
         q, v = ctx.state.positions, ctx.state.velocities
         self._communicate(q, v, ctx.t_s, ctx.dt_s)
-        self._held = self._anchors()  # roles and targets do not change until the next period
+        held = self._held = self._anchors()  # roles and targets stay until the next period
 
         p, helpers = self.params, self._helpers
         parents_m = self.help.parent_m[helpers]
 
         def helped(qq: np.ndarray, vv: np.ndarray, f: np.ndarray, f_lambda: np.ndarray
                    ) -> np.ndarray:  # fmt: skip
-            """Recruited robots follow their parent instead (a secondary's ``f_i`` too);
-            with ``help_lambda_factor`` their ``f_lambda`` is scaled by it
-            (:mod:`~tether.continuous.exploration.recruit`)."""
-            f[helpers] = help_force(qq[helpers], vv[helpers], parents_m, keep_m=p.rs_inner_m,
-                                    kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
-                                    max_force_n=p.max_travel_force_n)  # fmt: skip
-            if p.help_lambda_factor is not None:
-                f[helpers] -= (1.0 - p.help_lambda_factor) * f_lambda[helpers]
-            return f
+            """Recruited robots follow their parent instead (:func:`help_rows`)."""
+            return help_rows(qq, vv, f, f_lambda, helpers, parents_m, keep_m=p.rs_inner_m,
+                             kp=p.kp_n_per_m, kv=p.kv_ns_per_m,
+                             max_force_n=p.max_travel_force_n,
+                             lambda_factor=p.help_lambda_factor)  # fmt: skip
 
         def external(qq: np.ndarray, vv: np.ndarray, f_lambda: np.ndarray) -> np.ndarray:
             f = traveling_forces(qq, vv, f_lambda, self.planner, self.consensus.estimate, p,
@@ -335,10 +331,20 @@ class MultiTargetStrategy(ConnectivityStrategy):
             self._external = self._fused = None
         graph, lam, nu = ev[1]
         self._observe(q_new, graph, lam, nu)
-        self._bookkeep(q, q_new, float(lam), (ctx.step + 1) * ctx.dt_s, ctx.dt_s)
+        self._bookkeep(q, q_new, float(lam), (ctx.step + 1) * ctx.dt_s, ctx.dt_s, held)
         return TeamState(q_new, v_new)
 
-    def _bookkeep(self, q: np.ndarray, q_new: np.ndarray, lam: float, t_s: float, dt: float):
+    def _bookkeep(
+        self,
+        q: np.ndarray,
+        q_new: np.ndarray,
+        lam: float,
+        t_s: float,
+        dt: float,
+        anchors: tuple[np.ndarray, np.ndarray],
+    ) -> None:
+        """This period's sums, extremes and counts; ``anchors``: the held robots and their
+        targets (:meth:`_anchors`, unchanged since the period began)."""
         pl = self.planner
         if jit.enabled():  # the same sums and maximum, compiled
             far = _kernels().travel_stretch_kernel(
@@ -363,7 +369,7 @@ class MultiTargetStrategy(ConnectivityStrategy):
         self._vacant_steps += vacant
         self._vacancy_run = self._vacancy_run + 1 if vacant else 0
         self._longest_vacancy = max(self._longest_vacancy, self._vacancy_run)
-        held, targets = self._anchors()
+        held, targets = anchors
         if len(held) and _anchor_leaves(q_new, held, targets, self.params.rz_m):
             self._anchor_outside_steps += 1
         if self.params.reference_filter:
