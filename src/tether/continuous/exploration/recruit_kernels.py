@@ -44,7 +44,7 @@ def help_rows_kernel(q, v, f, f_lambda, helpers, parent_m, keep_m, kp, kv, max_f
             ratio = max_force_n / (norm if (norm >= 1e-300 or norm != norm) else 1e-300)
             scale = 1.0 if ratio >= 1.0 else ratio
         for c in range(dim):
-            f[i, c] = pull[c] * scale if saturated else pull[c]
+            f[i, c] = pull[c] * scale  # scale 1.0 unsaturated: exact
             if factor == factor:
                 f[i, c] = f[i, c] - (1.0 - factor) * f_lambda[i, c]
 
