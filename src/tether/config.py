@@ -225,6 +225,19 @@ class Scenario(_Strict):
     def base_dir(self) -> Path:
         return self._base_dir
 
+    def with_seed(self, seed: int) -> Scenario:
+        """This scenario with ``seed`` as its own: the seed a run, a trial or an episode ran.
+
+        The seed draws everything random in a run, the strategy's own draws from
+        ``scenario.seed`` included (e.g. the targets of ``multi_target``, whose
+        configuration is the run seed); source and folder stay those of this scenario.
+        """
+        if seed == self.seed:
+            return self
+        out = self.model_copy(update={"seed": seed})
+        out._source, out._base_dir = self._source, self._base_dir
+        return out
+
     def resolve_path(self, value: str | Path) -> Path:
         """A path from the scenario: relative to the scenario file's folder, else the cwd.
 

@@ -234,7 +234,9 @@ def build(scenario: Scenario | dict[str, Any] | str | Path, seed: int | None = N
     """
     scenario = as_scenario(scenario)
     seed = check_seed(seed)
-    rng = np.random.default_rng(scenario.seed if seed is None else seed)
+    if seed is not None:  # the seed of the run is the scenario's, for every draw
+        scenario = scenario.with_seed(seed)
+    rng = np.random.default_rng(scenario.seed)
     cls = strategy_class(scenario)
     params = strategy_params(scenario, cls)
     check_link_range(scenario, params)
@@ -339,10 +341,8 @@ def run(
         raise TypeError(f"out_dir must be a path (got {type(out_dir).__name__})")
     if figures is not None and not isinstance(figures, bool):
         raise TypeError(f"figures must be True, False or None (got {figures!r})")
-    if seed is not None and seed != scenario.seed:  # the run folder records the seed it ran
-        source, base_dir = scenario.source, scenario.base_dir
-        scenario = scenario.model_copy(update={"seed": seed})
-        scenario._source, scenario._base_dir = source, base_dir
+    if seed is not None:  # the run folder records the seed it ran
+        scenario = scenario.with_seed(seed)
     seed = scenario.seed
     built = build(scenario, seed)
     if check is not None:

@@ -28,7 +28,7 @@ from tether.envs.observe import obs_size, observations
 from tether.envs.options import EnvOptions
 from tether.envs.plant import bounded, landing_actions, move
 from tether.envs.rewards import reward, step_terms
-from tether.envs.setting import SCRIPTED_KINDS, Setting, make_setting, make_task, with_seed
+from tether.envs.setting import SCRIPTED_KINDS, Setting, make_setting, make_task
 from tether.record import TrajectoryRecorder
 from tether.runfolder import RunFolder
 from tether.runner import as_scenario, build, check_seed, write_run
@@ -63,7 +63,7 @@ class Episode:
 
     # -- building --------------------------------------------------------------------
     def _reset_built(self, seed: int) -> None:
-        scenario = with_seed(self.scenario, seed)
+        scenario = self.scenario.with_seed(seed)
         self.built = build(scenario, seed)
         self.setting: Setting = make_setting(self.built, self.options)
         if self.seed is None:  # spaces are fixed by the first build

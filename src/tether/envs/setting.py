@@ -24,7 +24,6 @@ the strategy's ``comm_range_m`` with a clear line of sight, as their runs do.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
@@ -152,16 +151,6 @@ def make_task(built: Built, setting: Setting, options: EnvOptions) -> NoTask:
         cell = options.coverage_cell_m or scenario.sensing.range_m / 5
         return Coverage(built.world, scenario.sensing.range_m, cell, setting.fixed[0])
     return NoTask()
-
-
-def with_seed(scenario: Any, seed: int) -> Any:
-    """``scenario`` with ``seed`` as its own (the run folder records the seed it ran)."""
-    if seed == scenario.seed:
-        return scenario
-    source, base_dir = scenario.source, scenario.base_dir
-    out = scenario.model_copy(update={"seed": seed})
-    out._source, out._base_dir = source, base_dir
-    return out
 
 
 def sensor_without_noise(sensor: SensorModel) -> SensorModel:

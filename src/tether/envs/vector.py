@@ -33,7 +33,6 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from tether.envs.episode import Episode
 from tether.envs.observe import OBS_LIMIT
 from tether.envs.options import TERMS, env_options
-from tether.envs.setting import with_seed
 from tether.envs.tasks import Goals, LeaderPath, Targets
 from tether.envs.vector_start import place, start_plan, world_tuple
 from tether.paths.trajectory import Polyline
@@ -178,7 +177,7 @@ class TetherVectorEnv(VectorEnv):
         """The team ``tether run --seed`` starts with, in the shared world."""
         ep = self.template
         built = ep.built
-        scenario = with_seed(ep.scenario, seed)
+        scenario = ep.scenario.with_seed(seed)
         rng = np.random.default_rng(seed)
         cls = type(built.strategy)
         params = cls.Params.model_validate(scenario.strategy.params)
