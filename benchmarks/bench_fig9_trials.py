@@ -42,6 +42,7 @@ def worker(root: Path, scenes: list[str], sizes: list[int], seeds: list[int]) ->
         sc = load_scenario(root / "src" / "tether" / "scenarios" / "paper"
                            / f"continuous_fig9_{scene}.yaml")  # fmt: skip
         sc.team.n_robots = n
+        sc.seed = seed  # the configuration is the run seed (as `tether sweep` runs it)
         b = build(sc, seed)
         cpu = time.process_time()
         res = simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=sc.sim.dt_s,
