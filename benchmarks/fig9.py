@@ -93,6 +93,14 @@ def failure(row: dict) -> str:
     return "; ".join(why)
 
 
+def _metric(row: dict, key: str) -> float:
+    """A trial's value of ``key``; the completion time only of a trial that reached every
+    target (``summary.json`` has none where a target was dropped or is pending)."""
+    if key == "completion_time_s" and row["targets_reached"] != row["targets_total"]:
+        return np.nan
+    return np.nan if row[key] is None else float(row[key])
+
+
 def _column(rows: list[dict], key: str) -> np.ndarray:
     return np.array([np.nan if r.get(key) is None else float(r[key]) for r in rows])
 
@@ -143,7 +151,7 @@ def summarise(rows: list[dict], sizes: list[int]) -> dict:
     out["sim_over_wall_median"] = {str(size): float(np.nanmedian(sim[n == size] / wall[n == size]))
                                    for size in sizes if (n == size).any()}  # fmt: skip
     for key, _ in METRICS:
-        vals = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+        vals = np.array([_metric(r, key) for r in rows], dtype=float)
         per = {}
         for size in sizes:
             v = vals[(n == size) & np.isfinite(vals)]

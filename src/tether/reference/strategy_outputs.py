@@ -89,7 +89,7 @@ _MULTI_TARGET_OWN = StrategyOutputs(
         "targets_dropped": Output("targets given up (unreachable, expired, stalled)"),
         "targets_pending": Output("targets neither reached nor dropped at the end"),
         "replans": Output("paths planned again"),
-        "completion_time_s": Output("when every target was done (null: not all were)"),
+        "completion_time_s": Output("when every target was reached (null: dropped or pending)"),
         "explorers": Output("robots that had targets"),
         "mean_explorer_distance_m": Output("mean distance travelled by the explorers"),
         "max_explorer_stretch_m": Output("largest distance between two explorers"),

@@ -421,10 +421,12 @@ class MultiTargetStrategy(ConnectivityStrategy):
     def metrics(self) -> dict[str, Any]:
         pl = self.planner
         ex = pl.explorer
+        summary = pl.summary()
         out = {
             **super().metrics(),
-            **pl.summary(),
-            "completion_time_s": self._completion,
+            **summary,
+            # the mission's completion: none while a target is pending or once one is dropped
+            "completion_time_s": self._completion if summary["targets_dropped"] == 0 else None,
             "explorers": int(ex.sum()),
             "mean_explorer_distance_m": float(self._travelled[ex].mean()) if ex.any() else 0.0,
             "max_explorer_stretch_m": self._stretch,
