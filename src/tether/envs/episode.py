@@ -63,8 +63,7 @@ class Episode:
 
     # -- building --------------------------------------------------------------------
     def _reset_built(self, seed: int) -> None:
-        scenario = self.scenario.with_seed(seed)
-        self.built = build(scenario, seed)
+        self.built = build(self.scenario, seed)  # built.scenario carries the seed
         self.setting: Setting = make_setting(self.built, self.options)
         if self.seed is None:  # spaces are fixed by the first build
             self.n, self.dim = self.setting.n, self.setting.dim
