@@ -115,3 +115,32 @@ def test_never_two_primes_with_loss_delay_and_changing_candidates(loss: float, d
         assert np.count_nonzero(acting) <= 1  # one token; a host whose token is in flight waits
         assert np.count_nonzero(e.token == ACTIVE) == active.sum()
     assert decided > 20 and primes_seen > 3  # elections do complete under loss and delay
+
+
+def test_the_token_holder_that_travels_again_takes_the_role_at_once() -> None:
+    """Algorithm 1, line 8: a prime whose succession found no candidate keeps the token;
+    when it takes its next target it knows no prime exists and is prime in that round,
+    instead of leaving the role vacant for its own poll of 2(N - 1) rounds. The start-up
+    election is not cut short: there the host's own candidacy competes."""
+    n = 6
+    layer = MessageLayer(n, CommParams(), np.random.default_rng(0))
+    e = Election(n, layer)
+    pairs = chain(n)
+    crit = np.array([5.0, 1.0, 9.0, 9.0, 9.0, 9.0])
+    candidate = np.zeros(n, dtype=bool)
+    candidate[[0, 1]] = True  # the start-up host 0 has a target too, robot 1 a shorter one
+    winner, rounds = run_until_prime(e, pairs, candidate, crit)
+    assert winner == 1 and rounds >= 2 * (n - 1)
+    candidate[:] = False  # robot 1 reaches its target; nobody else travels
+    wants = np.zeros(n, dtype=bool)
+    wants[1] = True
+    for _ in range(4 * n):
+        out = e.round(pairs, candidate, crit, np.ones(n, dtype=bool), wants)
+        if out.decided:
+            break
+    assert out.decided[0][1:] == (1, -1)  # no candidate: robot 1 holds the token idle
+    candidate[1], wants[1] = True, False  # it takes its next target
+    out = e.round(pairs, candidate, crit, np.ones(n, dtype=bool), wants)
+    assert out.became_prime == [1]
+    assert out.decided[0][1:] == (1, 1) and e.candidates[out.decided[0][0]] == [1]
+    assert e.token[1] == ACTIVE

@@ -21,7 +21,11 @@ whose election found no candidate keeps the token idle and polls again. This
 departs from Algorithm 1 in one place: a connector that receives a target when
 no prime exists becomes a secondary traveler and is elected, instead of making
 itself prime (line 8), because "no prime in the group" cannot be known exactly
-under delays, and two connectors acting on it at once would make two primes.
+under delays, and two connectors acting on it at once would make two primes. The
+one robot that does know is the token holder: after the start-up election, a holder
+that is a secondary traveler itself (a prime whose succession found no candidate,
+then took its next target) ends its poll as the winner at once (line 8 exactly), so
+no prime role stays vacant while its only candidate waits for its own poll.
 
 The state is arrays over robots; a round updates robot ``i`` from its own row
 and its inbox only.
@@ -89,6 +93,7 @@ class Election:
         self.handled = np.zeros(n, dtype=int)  # last result epoch robot i acted on
         self.candidates: dict[int, list[int]] = {}  # epoch -> who joined (for the event log)
         self.rounds = 0
+        self.started = False  # the start-up election was decided
 
     def holder(self) -> int:
         """The robot holding the token (-1 while it travels to a winner)."""
@@ -134,8 +139,8 @@ class Election:
                 election_busy_before,
             )
         if not fast or election_busy_before(self.token, m, self.opened_round, self.joined,
-                                            wants_election, candidate, IDLE, ACTIVE, NO_TOKEN,
-                                            EPOCH, RESULT):  # fmt: skip
+                                            wants_election, candidate, IDLE, ACTIVE, HOSTING,
+                                            NO_TOKEN, EPOCH, RESULT, self.started):  # fmt: skip
             self._open_and_join(candidate, criterion, wants_election, out)
         # flood: every robot merges what its neighbours sent (last values received)
         inbox = self.layer.exchange(pairs, m)
@@ -163,6 +168,10 @@ class Election:
     ) -> None:
         """Before the exchange: hosts open elections, candidates join the open ones."""
         m = self.msg
+        # the token holder that travels itself takes the role (Algorithm 1, line 8)
+        if self.started:
+            for h in np.flatnonzero(((self.token == IDLE) | (self.token == HOSTING)) & candidate):
+                self._take_own(int(h), out)
         # hosts: the idle token holder polls; the active prime opens when it asks to
         for h in np.flatnonzero(self.token != NO_TOKEN):
             if self.token[h] == IDLE or (self.token[h] == ACTIVE and wants_election[h]
@@ -177,6 +186,22 @@ class Election:
             self.joined[i] = int(m[i, EPOCH])
             self.candidates.setdefault(int(m[i, EPOCH]), []).append(int(i))
 
+    def _take_own(self, h: int, out: Outcome) -> None:
+        """Token holder ``h``, a secondary traveler, wins its own poll now and is prime."""
+        m = self.msg
+        if self.opened_round[h] < 0:
+            self.open(h, out)
+        epoch = int(m[h, EPOCH])
+        if h not in self.candidates.setdefault(epoch, []):
+            self.candidates[epoch].append(h)
+        self.opened_round[h] = -1
+        self.joined[h] = self.handled[h] = epoch
+        m[h, RESULT], m[h, WINNER] = epoch, h
+        m[h, ACK], m[h, ACK_CODE] = epoch, TAKEN
+        out.decided.append((epoch, h, h))
+        self.token[h] = ACTIVE
+        out.became_prime.append(h)
+
     def _decide(self, secondary: np.ndarray, out: Outcome) -> None:
         """After the exchange: hosts decide, winners take or decline, tokens in transit land."""
         m = self.msg
@@ -186,6 +211,7 @@ class Election:
                 continue
             epoch, best = int(m[h, EPOCH]), int(m[h, BEST_IDX])
             self.opened_round[h] = -1
+            self.started = True
             m[h, RESULT], m[h, WINNER] = epoch, (best if best < self.n else -1)
             out.decided.append((epoch, int(h), int(m[h, WINNER])))
             self.token[h] = IDLE if best >= self.n else TRANSIT

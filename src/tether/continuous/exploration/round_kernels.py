@@ -86,15 +86,18 @@ def consensus_kernel(estimate, recv, values, valid, gain_dt):  # noqa: ANN001, A
 
 @njit(cache=True)
 def election_busy_before(token, msg, opened_round, joined, wants, candidate, idle, active,
-                         no_token, epoch, result):  # noqa: ANN001, ANN201  # fmt: skip
+                         hosting, no_token, epoch, result, started):  # noqa: ANN001, ANN201, PLR0913  # fmt: skip
     """Whether a round of :meth:`~tether.continuous.exploration.election.Election.round` opens an
-    election or takes a candidacy before its exchange (the same tests, robot by robot).
+    election, lets the token holder take the role or takes a candidacy before its
+    exchange (the same tests, robot by robot).
 
-    False lets the caller skip both steps: they would do nothing.
+    False lets the caller skip these steps: they would do nothing.
     """
     for h in range(len(token)):
         if token[h] != no_token and (token[h] == idle or (token[h] == active and wants[h]
                                                           and opened_round[h] < 0)):  # fmt: skip
+            return True
+        if started and candidate[h] and token[h] == hosting:
             return True
     for i in range(len(token)):
         e = msg[i, epoch]
@@ -132,5 +135,5 @@ def warm_up() -> None:
     consensus_kernel(np.zeros(2), recv, vals[:, 0].copy(), valid, 0.5)
     token, opened, count = np.zeros(2, np.int64), np.full(2, -1), np.zeros(2, np.int64)
     flags = np.zeros(2, dtype=np.bool_)
-    election_busy_before(token, vals, opened, count, flags, flags, 1, 2, 0, 0, 4)
+    election_busy_before(token, vals, opened, count, flags, flags, 1, 2, 3, 0, 0, 4, True)
     election_busy_after(token, vals, opened, count, 1, 2, 3, 2, 4, 4, 5)
