@@ -42,7 +42,9 @@ def worker(root: Path, scenes: list[str], sizes: list[int], seeds: list[int]) ->
         sc = load_scenario(root / "src" / "tether" / "scenarios" / "paper"
                            / f"continuous_fig9_{scene}.yaml")  # fmt: skip
         sc.team.n_robots = n
-        sc.seed = seed  # the configuration is the run seed (as `tether sweep` runs it)
+        # the configuration is the run seed, as `tether sweep` runs it (set here too: the
+        # other checkout's build may draw the targets from the scenario's own seed)
+        sc.seed = seed
         b = build(sc, seed)
         cpu = time.process_time()
         res = simulate(b.world, b.sensor, b.strategy, b.initial, dt_s=sc.sim.dt_s,

@@ -94,15 +94,16 @@ def failure(row: dict) -> str:
 
 
 def _metric(row: dict, key: str) -> float:
-    """A trial's value of ``key``; the completion time only of a trial that reached every
-    target (``summary.json`` has none where a target was dropped or is pending)."""
+    """A trial's value of ``key`` (NaN if missing); the completion time only of a trial
+    that reached every target (``summary.json`` has none where a target was dropped or is
+    pending)."""
     if key == "completion_time_s" and row["targets_reached"] != row["targets_total"]:
         return np.nan
-    return np.nan if row[key] is None else float(row[key])
+    return np.nan if row.get(key) is None else float(row[key])
 
 
 def _column(rows: list[dict], key: str) -> np.ndarray:
-    return np.array([np.nan if r.get(key) is None else float(r[key]) for r in rows])
+    return np.array([_metric(r, key) for r in rows])
 
 
 def dynamics(rows: list[dict]) -> dict:
@@ -151,7 +152,7 @@ def summarise(rows: list[dict], sizes: list[int]) -> dict:
     out["sim_over_wall_median"] = {str(size): float(np.nanmedian(sim[n == size] / wall[n == size]))
                                    for size in sizes if (n == size).any()}  # fmt: skip
     for key, _ in METRICS:
-        vals = np.array([_metric(r, key) for r in rows], dtype=float)
+        vals = _column(rows, key)
         per = {}
         for size in sizes:
             v = vals[(n == size) & np.isfinite(vals)]

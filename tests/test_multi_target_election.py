@@ -13,6 +13,11 @@ def chain(n: int) -> np.ndarray:
     return np.array([(i, i + 1) for i in range(n - 1)])
 
 
+def lossless(n: int, host: int = 0) -> Election:
+    """An election of ``n`` robots over a message layer that loses and delays nothing."""
+    return Election(n, MessageLayer(n, CommParams(), np.random.default_rng(0)), host=host)
+
+
 def run_until_prime(
     election: Election,
     pairs: np.ndarray,
@@ -50,8 +55,7 @@ def test_ties_go_to_the_lower_index() -> None:
     crit = np.full(n, 5.0)
     candidate = np.zeros(n, dtype=bool)
     candidate[[6, 3, 5]] = True
-    layer = MessageLayer(n, CommParams(), np.random.default_rng(0))
-    assert run_until_prime(Election(n, layer), chain(n), candidate, crit)[0] == 3
+    assert run_until_prime(lossless(n), chain(n), candidate, crit)[0] == 3
 
 
 def test_a_tie_heard_later_from_a_higher_index_does_not_win() -> None:
@@ -61,14 +65,12 @@ def test_a_tie_heard_later_from_a_higher_index_does_not_win() -> None:
     crit = np.full(n, 5.0)
     candidate = np.zeros(n, dtype=bool)
     candidate[[1, 6]] = True
-    layer = MessageLayer(n, CommParams(), np.random.default_rng(0))
-    assert run_until_prime(Election(n, layer, host=3), chain(n), candidate, crit)[0] == 1
+    assert run_until_prime(lossless(n, host=3), chain(n), candidate, crit)[0] == 1
 
 
 def test_a_winner_that_is_no_longer_a_traveler_declines_and_a_new_election_follows() -> None:
     n = 6
-    layer = MessageLayer(n, CommParams(), np.random.default_rng(0))
-    e = Election(n, layer)
+    e = lossless(n)
     pairs = chain(n)
     crit = np.array([9.0, 9.0, 1.0, 9.0, 2.0, 9.0])
     candidate = np.zeros(n, dtype=bool)
@@ -123,8 +125,7 @@ def test_the_token_holder_that_travels_again_takes_the_role_at_once() -> None:
     instead of leaving the role vacant for its own poll of 2(N - 1) rounds. The start-up
     election is not cut short: there the host's own candidacy competes."""
     n = 6
-    layer = MessageLayer(n, CommParams(), np.random.default_rng(0))
-    e = Election(n, layer)
+    e = lossless(n)
     pairs = chain(n)
     crit = np.array([5.0, 1.0, 9.0, 9.0, 9.0, 9.0])
     candidate = np.zeros(n, dtype=bool)
