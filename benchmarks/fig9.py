@@ -120,6 +120,13 @@ def dynamics(rows: list[dict]) -> dict:
         vals = _column(rows, key)
         if np.isfinite(vals).any():
             out[key] = {"median": float(np.nanmedian(vals)), "max": float(np.nanmax(vals))}
+    # Sec. 3.3's bound on a vacancy of the prime role after the start-up: N - 1 steps
+    over = [r for r in rows if (r.get("longest_prime_vacancy_steps") or 0)
+            > r["param:team.n_robots"] - 1]  # fmt: skip
+    out["vacancy_above_bound"] = [
+        {"n_robots": r["param:team.n_robots"], "seed": r["seed"],
+         "steps": r["longest_prime_vacancy_steps"]} for r in over
+    ]  # fmt: skip
     sub, rej = _column(rows, "substeps"), _column(rows, "rejected_substeps")
     out["rejected_share"] = float(np.nansum(rej) / max(np.nansum(sub + rej), 1))
     out["substeps_per_step"] = float(np.nansum(sub) / max(np.nansum(_column(rows, "steps")), 1))
@@ -166,6 +173,12 @@ def summarise(rows: list[dict], sizes: list[int]) -> dict:
     return out
 
 
+def _over_bound(trials: list[dict]) -> str:
+    """``"k trials"`` and which, e.g. ``"1 trials (N = 15, seed 13: 25 steps)"``."""
+    which = ", ".join(f"N = {t['n_robots']}, seed {t['seed']}: {t['steps']} steps" for t in trials)
+    return f"{len(trials)} trials" + (f" ({which})" if which else "")
+
+
 def _mm(dyn: dict, key: str, unit: str) -> str:
     v = dyn.get(key)
     return f"median {v['median']:.3g}, max {v['max']:.3g} {unit}" if v else "-"
@@ -207,7 +220,8 @@ def markdown(result: dict, sizes: list[int]) -> str:
                 "by "
                 f"{_mm(dyn, 'reference_filter_max_deviation_m', 'm')}, its top acceleration "
                 f"{_mm(dyn, 'reference_filter_max_accel_mps2', 'm/s^2')}; longest prime vacancy "
-                f"{_mm(dyn, 'longest_prime_vacancy_steps', 'steps')}; "
+                f"{_mm(dyn, 'longest_prime_vacancy_steps', 'steps')}, above N - 1 in "
+                f"{_over_bound(dyn['vacancy_above_bound'])}; "
                 f"{dyn['substeps_per_step']:.1f} sub-steps per control step, "
                 f"{100 * dyn['rejected_share']:.1f} % of candidates rejected.")  # fmt: skip
         for f in entry["failed_trials"]:
